@@ -1,0 +1,415 @@
+// penumbra frame graph: passes declare the resources they read and write; the graph culls passes
+// whose results nobody needs, allocates (and aliases) transient resources from a pool that
+// persists across frames, places every barrier, times each pass on the GPU and the CPU, and dumps
+// itself as Graphviz. Pass code never writes barriers.
+//
+// Per frame:
+//     graph.reset();
+//     TextureRef target = graph.importTexture("backbuffer", handle, rhi::Access::None, rhi::Access::Present);
+//     const auto& gbuf = graph.addPass<GBufferData>("gbuffer", PassKind::Raster,
+//         [&](PassBuilder& b, GBufferData& d) {
+//             d.depth = b.write(b.createTexture("depth", depthDesc), rhi::Access::DepthTargetWrite);
+//         },
+//         [](const GBufferData& d, PassContext& ctx) { ctx.cmd.beginRenderPass(...); ... });
+//     ...
+//     if (graph.compile()) graph.execute(cmd);
+//     device.submit(cmd);
+//     auto timings = graph.collectTimings();
+//
+// Resources
+// - Refs (TextureRef / BufferRef) are small typed ids, valid until the next reset(). A ref kept
+//   across reset() is stale and reported as an error when used.
+// - Transients (PassBuilder::createTexture/createBuffer) are virtual until compile(). Their rhi
+//   usage flags are derived from every access declared on them (plus CopySrc, so any transient can
+//   be read back for debugging); the `usage` member of the desc passed in is ignored. Buffers keep
+//   the desc's `memory` type. A transient's contents are undefined at its first use in a frame
+//   (it enters in rhi::Access::None), so it must be written before it is read.
+// - Imported resources (importTexture/importBuffer) are owned by the caller. They enter in
+//   `currentState`; at the end of the frame the graph transitions them to `finalState` (default:
+//   `currentState`), whether or not a pass used them.
+//
+// Outputs and culling. A pass is kept when it has a side effect (PassBuilder::sideEffect()) or
+// when something kept needs what it writes. What is needed starts from the outputs:
+//   (a) every imported resource: its last contents are visible outside the graph, so every pass
+//       that writes an imported resource is kept (a pass that only reads one is not);
+//   (b) every resource passed to markOutput() (e.g. a transient read back after submission).
+// The graph tracks versions: each pass that writes a resource makes a new version of it. A version
+// is needed when it is the last version of an output or when a kept pass reads it. A write never
+// discards the previous version (LoadOp::Load, blending and partial writes read it), so a kept
+// writer also keeps the writer of the version before it. Culling is reference counting from
+// these needs backwards (Frostbite's FrameGraph): every pass counts the versions it produces,
+// every version counts its readers; versions nobody reads release their producer, a producer
+// left with no count is culled and releases the versions it read, iteratively. Culled passes
+// never execute; transients used only by culled passes are never allocated.
+//
+// Transient allocation. Physical textures/buffers come from a pool owned by the graph. Within a
+// frame, two transients with the same shape (textures: dimension, format, size, layers, mips;
+// buffers: size, memory type) whose lifetimes (first to last use among kept passes, in execution
+// order) do not overlap share one physical resource (aliasing); its usage is the union of theirs.
+// A transient passed to markOutput() lives to the end of the frame and is not aliased after its
+// last use. Across frames a physical resource is reused when a pool entry with the same shape and
+// a superset of the usage is free. Pool entries that no frame has used for `poolRetainFrames()`
+// consecutive compiles (default 3) are destroyed with Device::destroy (deferred by the RHI).
+//
+// Barriers. compile() walks the kept passes in order, tracking the state of every physical
+// resource, and gives each pass ONE batch of barriers recorded before its commands:
+// - the state a pass needs for a resource is the union of the accesses it declared on it;
+// - a resource gets a barrier when its state differs from the needed one (a layout change, or a
+//   different access to wait for), or when both are the same state and it includes a write
+//   (read-after-write / write-after-write between passes, e.g. ShaderWrite -> ShaderWrite or
+//   ColorTarget -> ColorTarget). Two passes reading in the same read state need no barrier.
+//   (Buffers also get one between different read states, e.g. ShaderRead -> UniformRead: it is
+//   cheap, keeps every tracked state exact for the RHI validation layer, and chains the
+//   execution dependency so a later write waits for every earlier reader.)
+// - every transient (aliased or not) starts each life in rhi::Access::None: its first use gets a
+//   barrier None -> needed state (contents discarded);
+// - after the last pass, one more batch moves imported resources to their finalState and
+//   transients given a final state in markOutput() to that state.
+//
+// Execution. execute() records, per kept pass: pushDebugGroup(name), a GPU timestamp, the
+// barrier batch, the pass's execute callback, a second timestamp, popDebugGroup; then the final
+// barrier batch. The query pool (2 slots per pass) is owned by the graph and grown as needed.
+// collectTimings() must be called after the command list was submitted: it calls
+// Device::readTimestamps, which waits for the GPU. When the device reports
+// info().limits.timestamps == false, no timestamps are recorded and every gpuMs is NaN.
+//
+// Errors (a resource that was never created or a stale ref, reading a transient before any pass
+// wrote it, incompatible read and write usages of one resource in one pass, an access that makes
+// no sense for the resource or pass kind, addPass/import after compile(), compile() twice) are
+// reported through the log callback given to the constructor (default: stderr). After an error,
+// compile() returns false and execute() records nothing. Nothing here throws or aborts.
+//
+// The device must outlive the graph. Not thread-safe: use one graph from one thread.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include "rhi/device.h"
+
+namespace penumbra::fg {
+
+enum class PassKind : uint8_t { Compute, Raster, Transfer };
+const char* toString(PassKind kind);
+
+inline constexpr uint32_t kInvalidIndex = 0xffffffffu;
+
+// Typed ids of virtual resources; `epoch` identifies the frame (reset) that created them.
+struct TextureRef {
+    uint32_t index = kInvalidIndex;
+    uint32_t epoch = 0;
+    constexpr bool isValid() const { return index != kInvalidIndex; }
+    friend constexpr bool operator==(const TextureRef&, const TextureRef&) = default;
+};
+
+struct BufferRef {
+    uint32_t index = kInvalidIndex;
+    uint32_t epoch = 0;
+    constexpr bool isValid() const { return index != kInvalidIndex; }
+    friend constexpr bool operator==(const BufferRef&, const BufferRef&) = default;
+};
+
+struct PassTiming {
+    std::string name;
+    double gpuMs = 0.0;  // NaN when the device has no timestamps or they could not be read
+    double cpuMs = 0.0;  // time spent recording the pass (barriers + execute callback)
+};
+
+struct CompiledPass {
+    std::string name;
+    PassKind kind = PassKind::Compute;
+    std::vector<rhi::Barrier> barriers;  // the one batch recorded before the pass's commands
+};
+
+// What compile() decided; valid until the next reset().
+struct CompiledInfo {
+    std::vector<CompiledPass> passes;         // kept passes, in execution order
+    std::vector<std::string> culledPasses;    // in declaration order
+    std::vector<rhi::Barrier> finalBarriers;  // end-of-frame transitions (imports, outputs)
+    uint32_t transientCount = 0;              // virtual transients that were allocated
+    uint32_t physicalTextureCount = 0;        // physical textures backing them this frame
+    uint32_t physicalBufferCount = 0;         // physical buffers backing them this frame
+    uint32_t physicalResourceCount = 0;       // textures + buffers
+    uint32_t texturesCreated = 0;             // created this frame (0 when the pool served all)
+    uint32_t buffersCreated = 0;
+    uint32_t poolEntriesReleased = 0;  // pool entries destroyed this compile (unused too long)
+    // Estimated memory of the physical transients used this frame: for textures the sum over mips
+    // of width * height * depth-or-layers * bytes per texel, for buffers their size.
+    uint64_t transientMemoryBytes = 0;
+
+    const CompiledPass* findPass(std::string_view name) const;
+    bool isCulled(std::string_view name) const;
+};
+
+class FrameGraph;
+class PassContext;
+
+namespace detail {
+struct PassExecutor {
+    virtual ~PassExecutor() = default;
+    virtual void run(PassContext& ctx) = 0;
+};
+}  // namespace detail
+
+// Handed to a pass's setup callback: declares what the pass creates, reads and writes.
+// Every method returns the ref it was given (or created), for chaining.
+class PassBuilder {
+public:
+    // Transient resources, allocated by compile() only when a kept pass uses them.
+    TextureRef createTexture(std::string name, const rhi::TextureDesc& desc);
+    BufferRef createBuffer(std::string name, const rhi::BufferDesc& desc);
+    // `usage` must be read-only accesses (ShaderSampled, ShaderRead, UniformRead, VertexRead,
+    // IndexRead, IndirectRead, DepthTargetRead, CopySrc, HostRead, Present).
+    TextureRef read(TextureRef ref, rhi::Access usage);
+    BufferRef read(BufferRef ref, rhi::Access usage);
+    // `usage` must include a write (ShaderWrite, ColorTarget, DepthTargetWrite, CopyDst,
+    // HostWrite). A pass may read and write one resource only as ShaderRead + ShaderWrite,
+    // DepthTargetRead + DepthTargetWrite, or (buffers) CopySrc + CopyDst.
+    TextureRef write(TextureRef ref, rhi::Access usage);
+    BufferRef write(BufferRef ref, rhi::Access usage);
+    // The pass does something outside the graph (readback, presentation, counters): never culled.
+    void sideEffect();
+
+private:
+    friend class FrameGraph;
+    PassBuilder(FrameGraph& graph, uint32_t pass) : m_graph(graph), m_pass(pass) {}
+    FrameGraph& m_graph;
+    uint32_t m_pass;
+};
+
+// Handed to a pass's execute callback.
+class PassContext {
+public:
+    rhi::CommandList& cmd;
+    rhi::Device& device;
+
+    // Physical handles of resources this pass declared (read or write). Anything else is an
+    // error: it is logged and an invalid handle is returned.
+    rhi::TextureHandle texture(TextureRef ref) const;
+    rhi::BufferHandle buffer(BufferRef ref) const;
+    // Descriptions (transients: as created, with the derived usage; imports: as the device
+    // describes them). Never null: an empty desc is returned for bad refs.
+    const rhi::TextureDesc& textureDesc(TextureRef ref) const;
+    const rhi::BufferDesc& bufferDesc(BufferRef ref) const;
+    const std::string& name() const;
+
+private:
+    friend class FrameGraph;
+    PassContext(rhi::CommandList& c, rhi::Device& d, const FrameGraph& g, uint32_t pass)
+        : cmd(c), device(d), m_graph(g), m_pass(pass) {}
+    const FrameGraph& m_graph;
+    uint32_t m_pass;
+};
+
+namespace detail {
+template <typename Data, typename Execute>
+struct TypedPass final : PassExecutor {
+    explicit TypedPass(Execute&& e) : execute(std::move(e)) {}
+    explicit TypedPass(const Execute& e) : execute(e) {}
+    void run(PassContext& ctx) override { execute(static_cast<const Data&>(data), ctx); }
+    Data data{};
+    Execute execute;
+};
+}  // namespace detail
+
+class FrameGraph {
+public:
+    // `log` receives every error (null: messages go to stderr).
+    explicit FrameGraph(rhi::Device& device, rhi::LogCallback log = {});
+    ~FrameGraph();
+    FrameGraph(const FrameGraph&) = delete;
+    FrameGraph& operator=(const FrameGraph&) = delete;
+
+    // How many consecutive compiles a pool entry may go unused before it is destroyed (default 3;
+    // 0 destroys entries at the first compile that does not use them).
+    void setPoolRetainFrames(uint32_t frames) { m_retainFrames = frames; }
+    uint32_t poolRetainFrames() const { return m_retainFrames; }
+    // Destroys every pool entry not used by the current compiled frame (e.g. after a resize).
+    void trimPool();
+    size_t pooledTextureCount() const { return m_texturePool.size(); }
+    size_t pooledBufferCount() const { return m_bufferPool.size(); }
+
+    // Starts a new frame: forgets every pass and resource of the previous one (refs become stale)
+    // and frees the pool entries for reuse. Call once per frame before adding passes.
+    void reset();
+
+    // External resources, entering the frame in `currentState` and left in `finalState` (default:
+    // `currentState`). One handle may be imported only once per frame.
+    TextureRef importTexture(std::string name, rhi::TextureHandle texture, rhi::Access currentState);
+    TextureRef importTexture(std::string name, rhi::TextureHandle texture, rhi::Access currentState,
+                             rhi::Access finalState);
+    BufferRef importBuffer(std::string name, rhi::BufferHandle buffer, rhi::Access currentState);
+    BufferRef importBuffer(std::string name, rhi::BufferHandle buffer, rhi::Access currentState,
+                           rhi::Access finalState);
+
+    // Marks a result that must survive the frame: its producers are kept and (for transients) the
+    // physical resource is not aliased after it. With finalState != None the resource is
+    // transitioned to it at the end of the frame. Read the handle with physicalTexture() and the
+    // state it is left in with finalState() after compile().
+    void markOutput(TextureRef ref, rhi::Access finalState = rhi::Access::None);
+    void markOutput(BufferRef ref, rhi::Access finalState = rhi::Access::None);
+
+    // Adds a pass. `setup(PassBuilder&, Data&)` runs at once and declares resources; `execute(const
+    // Data&, PassContext&)` runs in execute() if the pass survives culling. Data must be default
+    // constructible; the returned reference stays valid until reset().
+    template <typename Data, typename Setup, typename Execute>
+    const Data& addPass(std::string name, PassKind kind, Setup&& setup, Execute&& execute) {
+        using Exec = std::decay_t<Execute>;
+        auto pass = std::make_unique<detail::TypedPass<Data, Exec>>(std::forward<Execute>(execute));
+        Data& data = pass->data;
+        uint32_t index = beginPass(std::move(name), kind, std::move(pass));
+        PassBuilder builder(*this, index);
+        setup(builder, data);
+        return data;
+    }
+
+    // Culls, allocates transients and places barriers. Returns false (after logging) on any error
+    // in this frame's declarations, on a failed allocation, or when called twice in one frame.
+    bool compile();
+    // Records every kept pass into `cmd`. Does nothing if compile() did not succeed.
+    void execute(rhi::CommandList& cmd);
+    // Per-pass timings of the executed passes, in execution order (culled passes have none).
+    // Call after the command list given to execute() was submitted (it waits for the GPU).
+    std::vector<PassTiming> collectTimings();
+
+    // Graphviz digraph: pass nodes (boxes; culled ones dashed and grey), resource nodes (imported:
+    // bold double ellipses; transients: ellipses with their physical resource and the transients
+    // aliased with it), read edges resource -> pass and write edges pass -> resource labelled with
+    // the access. Before compile() nothing is shown as culled.
+    std::string toGraphviz() const;
+
+    const CompiledInfo& compiled() const { return m_info; }
+    bool isCompiled() const { return m_compiled && !m_failed; }
+    bool hasErrors() const { return m_failed; }
+
+    // After a successful compile(): the physical handle behind a ref (invalid for transients that
+    // were not allocated) and the state the resource is left in at the end of the frame.
+    rhi::TextureHandle physicalTexture(TextureRef ref) const;
+    rhi::BufferHandle physicalBuffer(BufferRef ref) const;
+    rhi::Access finalState(TextureRef ref) const;
+    rhi::Access finalState(BufferRef ref) const;
+
+private:
+    friend class PassBuilder;
+    friend class PassContext;
+
+    enum class ResourceType : uint8_t { Texture, Buffer };
+
+    struct ResourceNode {
+        std::string name;
+        ResourceType type = ResourceType::Texture;
+        bool imported = false;
+        bool output = false;
+        rhi::TextureDesc textureDesc;
+        rhi::BufferDesc bufferDesc;
+        rhi::TextureHandle importedTexture;
+        rhi::BufferHandle importedBuffer;
+        rhi::Access initialState = rhi::Access::None;
+        rhi::Access finalState = rhi::Access::None;  // imports: target; outputs: None = as left
+        uint32_t creatorPass = kInvalidIndex;
+        uint32_t version = 0;             // passes that have written it so far (during setup)
+        std::vector<uint32_t> producers;  // producers[v - 1] = pass that made version v
+        // compile results
+        std::vector<uint32_t> versionRefs;  // versionRefs[v - 1]
+        bool allocated = false;
+        uint32_t firstUse = kInvalidIndex;  // execution indices
+        uint32_t lastUse = 0;
+        uint32_t slot = kInvalidIndex;  // state-tracking slot (physical resource or import)
+        rhi::Access endState = rhi::Access::None;
+    };
+
+    struct ResourceUse {
+        uint32_t resource = kInvalidIndex;
+        rhi::Access read = rhi::Access::None;
+        rhi::Access write = rhi::Access::None;
+        uint32_t inputVersion = 0;   // version read (and overwritten) by the pass
+        uint32_t outputVersion = 0;  // version produced (writes only)
+    };
+
+    struct PassNode {
+        std::string name;
+        PassKind kind = PassKind::Compute;
+        bool sideEffect = false;
+        bool culled = false;
+        uint32_t refCount = 0;
+        std::vector<ResourceUse> uses;
+        std::unique_ptr<detail::PassExecutor> executor;
+    };
+
+    // One tracked physical identity this frame: a physical transient or an import.
+    struct Slot {
+        ResourceType type = ResourceType::Texture;
+        bool imported = false;
+        rhi::TextureHandle texture;
+        rhi::BufferHandle buffer;
+        rhi::TextureDesc textureDesc;  // shape of a transient slot (usage: union of its occupants)
+        rhi::BufferDesc bufferDesc;
+        uint32_t lastUse = 0;  // aliasing: last execution index of the current occupant
+        rhi::TextureUsage textureUsage = rhi::TextureUsage::None;
+        rhi::BufferUsage bufferUsage = rhi::BufferUsage::None;
+        std::vector<uint32_t> resources;  // virtual resources mapped to it, in order of first use
+        rhi::Access state = rhi::Access::None;
+    };
+
+    struct PooledTexture {
+        rhi::TextureHandle handle;
+        rhi::TextureDesc desc;
+        uint64_t lastUsedFrame = 0;
+        bool inUse = false;
+    };
+    struct PooledBuffer {
+        rhi::BufferHandle handle;
+        rhi::BufferDesc desc;
+        uint64_t lastUsedFrame = 0;
+        bool inUse = false;
+    };
+
+    uint32_t beginPass(std::string name, PassKind kind, std::unique_ptr<detail::PassExecutor> executor);
+    uint32_t createResource(uint32_t pass, std::string name, ResourceType type);
+    uint32_t resolve(uint32_t index, uint32_t epoch, ResourceType type) const;
+    bool declare(uint32_t pass, uint32_t resource, rhi::Access usage, bool isWrite);
+    uint32_t importResource(std::string name, ResourceType type, rhi::TextureHandle texture,
+                            rhi::BufferHandle buffer, rhi::Access currentState, rhi::Access finalState);
+    void markOutputResource(uint32_t resource, rhi::Access finalState);
+    const ResourceUse* findUse(uint32_t pass, uint32_t resource) const;
+
+    void cull();
+    bool allocate();
+    void placeBarriers();
+    void releaseUnusedPoolEntries(bool all);
+
+    void error(const std::string& message);
+    void log(rhi::LogSeverity severity, const std::string& message) const;
+
+    rhi::Device& m_device;
+    rhi::LogCallback m_log;
+    uint32_t m_retainFrames = 3;
+    uint64_t m_frame = 0;
+    uint32_t m_epoch = 0;
+
+    std::vector<PassNode> m_passes;
+    std::vector<ResourceNode> m_resources;
+    std::vector<uint32_t> m_order;  // kept passes, execution order
+    std::vector<Slot> m_slots;      // imports first, then physical transients
+    uint32_t m_firstTransientSlot = 0;
+    std::vector<PooledTexture> m_texturePool;
+    std::vector<PooledBuffer> m_bufferPool;
+    CompiledInfo m_info;
+    bool m_compiled = false;
+    bool m_failed = false;
+    bool m_executed = false;
+
+    rhi::QueryPoolHandle m_queryPool;
+    uint32_t m_queryCapacity = 0;
+    bool m_timestampsRecorded = false;
+    bool m_timingsCollected = false;
+    std::vector<double> m_cpuMs;
+    std::vector<PassTiming> m_timings;
+};
+
+}  // namespace penumbra::fg
