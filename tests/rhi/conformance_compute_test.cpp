@@ -1,0 +1,220 @@
+// RHI conformance: compute writes to storage images (rgba32f, rgba8, r32ui, individual mip levels)
+// and storage buffers, and timestamp queries around dispatches.
+#include <cstdint>
+#include <cstring>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include <shaders/conf_busy.h>
+#include <shaders/conf_storage_mip.h>
+#include <shaders/conf_storage_rgba32f.h>
+#include <shaders/conf_storage_rgba8_r32ui.h>
+
+#include "conformance_common.h"
+
+namespace {
+
+using namespace rhi;
+using penumbra::conformance::ConformanceTest;
+using penumbra::conformance::Rng;
+
+class ConformanceCompute : public ConformanceTest {};
+class ConformanceQueries : public ConformanceTest {};
+
+// imageStore into an rgba32f storage image and plain stores into a storage buffer.
+TEST_P(ConformanceCompute, StorageImageRgba32fAndStorageBuffer) {
+    const uint32_t kW = 37, kH = 21;  // not multiples of the 8x8 workgroup
+    TextureHandle image =
+        makeTexture2D(Format::RGBA32_FLOAT, kW, kH, TextureUsage::Storage | TextureUsage::CopySrc);
+    BufferHandle words = makeBuffer(kW * kH * 4, BufferUsage::Storage | BufferUsage::CopySrc);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_storage_rgba32f::compute());
+    ASSERT_TRUE(image.isValid() && words.isValid() && pipeline.isValid());
+    BindGroupHandle group = makeBindGroup(
+        pipeline, 0, {BindGroupEntry::makeStorage(0, image), BindGroupEntry::makeBuffer(1, words)});
+    ASSERT_TRUE(group.isValid());
+
+    const uint32_t size[4] = {kW, kH, 0, 0};
+    CommandList& cmd = dev().beginCommandList("storage rgba32f");
+    cmd.barrier(Barrier::tex(image, Access::None, Access::ShaderWrite));
+    cmd.bindPipeline(pipeline);
+    cmd.bindGroup(0, group);
+    cmd.pushConstants(size, sizeof(size));
+    cmd.dispatch((kW + 7) / 8, (kH + 7) / 8);
+    cmd.barrier(Barrier::tex(image, Access::ShaderWrite, Access::CopySrc));
+    cmd.barrier(Barrier::buf(words, Access::ShaderWrite, Access::HostRead));
+    submitAndWait(cmd);
+
+    const std::vector<float> texels = readTextureAs<float>(image, {}, Access::CopySrc);
+    const std::vector<uint32_t> result = readBuffer<uint32_t>(words, kW * kH);
+    ASSERT_EQ(texels.size(), size_t(kW) * kH * 4);
+    ASSERT_EQ(result.size(), size_t(kW) * kH);
+    for (uint32_t y = 0; y < kH; ++y) {
+        for (uint32_t x = 0; x < kW; ++x) {
+            const float* t = &texels[(y * kW + x) * 4];
+            const float expected[4] = {float(x), float(y), float(x) * 0.25f, -float(y) * 0.5f - 1.0f};
+            for (int c = 0; c < 4; ++c) {
+                // Metric: texel channel equals the pattern (exactly representable). Threshold: exact.
+                EXPECT_EQ(t[c], expected[c]) << "texel (" << x << ", " << y << ") channel " << c;
+            }
+            // Metric: buffer word equals the hash pattern. Threshold: exact.
+            EXPECT_EQ(result[y * kW + x], (x * 2654435761u) ^ (y << 16) ^ 0xA5A5A5A5u)
+                << "word (" << x << ", " << y << ")";
+        }
+    }
+}
+
+// An rgba8 storage image (write-only) and an r32ui storage image (read-modify-write of texels that
+// were uploaded with writeTexture).
+TEST_P(ConformanceCompute, StorageImageRgba8AndR32uiReadModifyWrite) {
+    const uint32_t kW = 64, kH = 32;
+    TextureHandle colors =
+        makeTexture2D(Format::RGBA8_UNORM, kW, kH, TextureUsage::Storage | TextureUsage::CopySrc);
+    TextureHandle counters = makeTexture2D(
+        Format::R32_UINT, kW, kH, TextureUsage::Storage | TextureUsage::CopyDst | TextureUsage::CopySrc);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_storage_rgba8_r32ui::compute());
+    ASSERT_TRUE(colors.isValid() && counters.isValid() && pipeline.isValid());
+    std::vector<uint32_t> initial(kW * kH);
+    Rng rng(77);
+    for (auto& v : initial) v = rng.next() >> 4;
+    dev().writeTexture(counters, {}, initial.data(), initial.size() * 4);  // leaves it ShaderSampled
+
+    BindGroupHandle group = makeBindGroup(
+        pipeline, 0, {BindGroupEntry::makeStorage(0, colors), BindGroupEntry::makeStorage(1, counters)});
+    ASSERT_TRUE(group.isValid());
+    const uint32_t size[4] = {kW, kH, 0, 0};
+    CommandList& cmd = dev().beginCommandList("storage rgba8 r32ui");
+    const Barrier before[] = {
+        Barrier::tex(colors, Access::None, Access::ShaderWrite),
+        Barrier::tex(counters, Access::ShaderSampled, Access::ShaderRead | Access::ShaderWrite)};
+    cmd.barrier(before);
+    cmd.bindPipeline(pipeline);
+    cmd.bindGroup(0, group);
+    cmd.pushConstants(size, sizeof(size));
+    cmd.dispatch(kW / 8, kH / 8);
+    const Barrier after[] = {
+        Barrier::tex(colors, Access::ShaderWrite, Access::CopySrc),
+        Barrier::tex(counters, Access::ShaderRead | Access::ShaderWrite, Access::CopySrc)};
+    cmd.barrier(after);
+    submitAndWait(cmd);
+
+    const std::vector<uint8_t> rgba = readTexture(colors, {}, Access::CopySrc);
+    const std::vector<uint32_t> values = readTextureAs<uint32_t>(counters, {}, Access::CopySrc);
+    ASSERT_EQ(rgba.size(), size_t(kW) * kH * 4);
+    ASSERT_EQ(values.size(), size_t(kW) * kH);
+    for (uint32_t y = 0; y < kH; ++y) {
+        for (uint32_t x = 0; x < kW; ++x) {
+            const uint8_t* p = &rgba[(y * kW + x) * 4];
+            // Metric: UNORM8 encoding of (x/255, y/255, (x+y)/255, 1) is (x, y, x+y, 255). Threshold: exact.
+            EXPECT_EQ(p[0], x);
+            EXPECT_EQ(p[1], y);
+            EXPECT_EQ(p[2], x + y);
+            EXPECT_EQ(p[3], 255) << "texel (" << x << ", " << y << ")";
+            // Metric: r32ui texel = initial * 3 + (x << 8) + y + 0x10000000 (mod 2^32). Threshold: exact.
+            EXPECT_EQ(values[y * kW + x], initial[y * kW + x] * 3u + (x << 8) + y + 0x10000000u)
+                << "texel (" << x << ", " << y << ")";
+        }
+    }
+}
+
+// Each mip level of a storage image is bound separately (BindGroupEntry::mip) and written.
+TEST_P(ConformanceCompute, StorageImageMipLevelBinding) {
+    const uint32_t kW = 32, kH = 16, kMips = 3;
+    TextureHandle image =
+        makeTexture2D(Format::R32_UINT, kW, kH, TextureUsage::Storage | TextureUsage::CopySrc, kMips);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_storage_mip::compute());
+    ASSERT_TRUE(image.isValid() && pipeline.isValid());
+    BindGroupHandle groups[kMips];
+    for (uint32_t mip = 0; mip < kMips; ++mip) {
+        groups[mip] = makeBindGroup(pipeline, 0, {BindGroupEntry::makeStorage(0, image, mip)});
+        ASSERT_TRUE(groups[mip].isValid());
+    }
+
+    CommandList& cmd = dev().beginCommandList("storage mips");
+    cmd.barrier(Barrier::tex(image, Access::None, Access::ShaderWrite));
+    cmd.bindPipeline(pipeline);
+    for (uint32_t mip = 0; mip < kMips; ++mip) {
+        const uint32_t w = kW >> mip, h = kH >> mip;
+        const uint32_t info[4] = {mip, w, h, 0};
+        cmd.bindGroup(0, groups[mip]);
+        cmd.pushConstants(info, sizeof(info));
+        cmd.dispatch((w + 7) / 8, (h + 7) / 8);
+    }
+    cmd.barrier(Barrier::tex(image, Access::ShaderWrite, Access::CopySrc));
+    submitAndWait(cmd);
+
+    for (uint32_t mip = 0; mip < kMips; ++mip) {
+        const uint32_t w = kW >> mip, h = kH >> mip;
+        const std::vector<uint32_t> values = readTextureAs<uint32_t>(image, {mip, 0}, Access::CopySrc);
+        ASSERT_EQ(values.size(), size_t(w) * h) << "mip " << mip;
+        for (uint32_t y = 0; y < h; ++y)
+            for (uint32_t x = 0; x < w; ++x) {
+                // Metric: texel of mip m holds (m << 24 | y << 12 | x). Threshold: exact.
+                EXPECT_EQ(values[y * w + x], (mip << 24) | (y << 12) | x)
+                    << "mip " << mip << " texel (" << x << ", " << y << ")";
+            }
+    }
+}
+
+// Timestamps written around dispatches (in two submissions) do not decrease, the last is later
+// than the first, and the elapsed time is plausible.
+TEST_P(ConformanceQueries, TimestampsIncrease) {
+    ASSERT_TRUE(dev().info().limits.timestamps) << "timestamp queries are expected on both backends";
+    constexpr uint32_t kElements = 16384;
+    constexpr uint32_t kStamps = 6;
+    BufferHandle data = makeBuffer(kElements * 4, BufferUsage::Storage | BufferUsage::CopyDst);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_busy::compute());
+    QueryPoolHandle pool = makeQueryPool(8);
+    ASSERT_TRUE(data.isValid() && pipeline.isValid() && pool.isValid());
+    BindGroupHandle group = makeBindGroup(pipeline, 0, {BindGroupEntry::makeBuffer(0, data)});
+    ASSERT_TRUE(group.isValid());
+    const uint32_t iterations = 64;
+
+    CommandList& first = dev().beginCommandList("timestamps 1");
+    first.resetQueries(pool, 0, 8);
+    first.fillBuffer(data, 0, kElements * 4, 1);
+    first.barrier(Barrier::buf(data, Access::CopyDst, Access::ShaderRead | Access::ShaderWrite));
+    first.bindPipeline(pipeline);
+    first.bindGroup(0, group);
+    first.pushConstants(&iterations, sizeof(iterations));
+    first.writeTimestamp(pool, 0);
+    for (uint32_t i = 1; i < 4; ++i) {
+        first.dispatch(kElements / 64);
+        first.barrier(Barrier::buf(data, Access::ShaderRead | Access::ShaderWrite,
+                                   Access::ShaderRead | Access::ShaderWrite));
+        first.writeTimestamp(pool, i);
+    }
+    dev().submit(first);
+
+    const Access rw = Access::ShaderRead | Access::ShaderWrite;
+    CommandList& second = dev().beginCommandList("timestamps 2");
+    second.barrier(Barrier::buf(data, rw, rw));
+    second.bindPipeline(pipeline);
+    second.bindGroup(0, group);
+    second.pushConstants(&iterations, sizeof(iterations));
+    second.dispatch(kElements / 64);
+    second.writeTimestamp(pool, 4);
+    second.barrier(Barrier::buf(data, rw, rw));
+    second.dispatch(kElements / 64);
+    second.writeTimestamp(pool, 5);
+    submitAndWait(second);
+
+    uint64_t ns[kStamps] = {};
+    ASSERT_TRUE(dev().readTimestamps(pool, 0, kStamps, ns));
+    for (uint32_t i = 1; i < kStamps; ++i) {
+        // Metric: timestamp i >= timestamp i-1. Threshold: non-decreasing.
+        EXPECT_GE(ns[i], ns[i - 1]) << "timestamp " << i;
+    }
+    // Metric: last - first > 0 and < 10 s (1e10 ns): time passed and the period is applied.
+    EXPECT_GT(ns[kStamps - 1], ns[0]);
+    EXPECT_LT(ns[kStamps - 1] - ns[0], 10'000'000'000ull);
+    std::printf("[ %s ] timestamps: %.3f ms across 5 dispatches\n", toString(GetParam()),
+                double(ns[kStamps - 1] - ns[0]) * 1e-6);
+}
+
+INSTANTIATE_TEST_SUITE_P(Backends, ConformanceCompute, testing::ValuesIn(penumbra::test::gpuBackends()),
+                         penumbra::test::backendName);
+INSTANTIATE_TEST_SUITE_P(Backends, ConformanceQueries, testing::ValuesIn(penumbra::test::gpuBackends()),
+                         penumbra::test::backendName);
+
+}  // namespace

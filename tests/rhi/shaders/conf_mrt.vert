@@ -1,0 +1,2 @@
+#version 450
+#include "conf_rect_vs.glsl"
