@@ -41,7 +41,9 @@ std::vector<rhi::Backend> gpuBackends() {
 }
 
 std::string backendName(const testing::TestParamInfo<rhi::Backend>& info) {
-    return info.param == rhi::Backend::Vulkan ? "Vulkan" : info.param == rhi::Backend::OpenGL ? "OpenGL" : "Null";
+    return info.param == rhi::Backend::Vulkan   ? "Vulkan"
+           : info.param == rhi::Backend::OpenGL ? "OpenGL"
+                                                : "Null";
 }
 
 std::unique_ptr<rhi::Device> createTestDevice(rhi::Backend backend, std::shared_ptr<LogCapture> log,
@@ -76,8 +78,9 @@ void GpuTest::SetUp() {
 void GpuTest::TearDown() {
     if (m_device) m_device->waitIdle();
     std::lock_guard lock(m_log->mutex);
-    EXPECT_TRUE(m_log->errors.empty()) << m_log->errors.size() << " validation error(s), first: "
-                                       << (m_log->errors.empty() ? "" : m_log->errors.front());
+    EXPECT_TRUE(m_log->errors.empty())
+        << m_log->errors.size()
+        << " validation error(s), first: " << (m_log->errors.empty() ? "" : m_log->errors.front());
     m_device.reset();
 }
 

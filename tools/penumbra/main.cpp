@@ -1,0 +1,159 @@
+// penumbra — command-line front end.
+//   penumbra info [--backend vulkan|gl]      device, driver and limits
+//   penumbra demo -o out.png [--backend] [--width --height]   the RHI demo frame + timing table
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <CLI/CLI.hpp>
+
+#include "engine/core/log.h"
+#include "engine/image/image.h"
+#include "renderer/demo/rhi_demo.h"
+#include "rhi/device.h"
+
+namespace {
+
+struct DeviceOptions {
+    std::string backend;  // empty: PENUMBRA_BACKEND or auto
+    bool validation = false;
+};
+
+void addDeviceOptions(CLI::App* cmd, DeviceOptions& opt) {
+    cmd->add_option("--backend", opt.backend,
+                    "Graphics backend: vulkan | gl (default: $PENUMBRA_BACKEND, else auto)")
+        ->check(CLI::IsMember({"vulkan", "vk", "gl", "opengl", "auto"}, CLI::ignore_case));
+    cmd->add_flag("--validation", opt.validation,
+                  "Enable RHI validation and the Vulkan validation layer / GL debug output");
+}
+
+std::unique_ptr<rhi::Device> openDevice(const DeviceOptions& opt) {
+    rhi::DeviceDesc desc;
+    desc.headless = true;
+    desc.validation = opt.validation;
+    if (!opt.backend.empty() && !rhi::parseBackend(opt.backend, desc.backend)) {
+        penumbra::log::error("unknown backend '{}'", opt.backend);
+        return nullptr;
+    }
+    desc.log = [](rhi::LogSeverity s, std::string_view msg) {
+        using penumbra::log::Severity;
+        penumbra::log::write(s == rhi::LogSeverity::Error     ? Severity::Error
+                             : s == rhi::LogSeverity::Warning ? Severity::Warning
+                             : s == rhi::LogSeverity::Info    ? Severity::Info
+                                                              : Severity::Debug,
+                             msg);
+    };
+    auto device = rhi::createDevice(desc);
+    if (!device)
+        penumbra::log::error("no usable graphics device (backend '{}')",
+                             opt.backend.empty() ? "auto" : opt.backend);
+    return device;
+}
+
+int runInfo(const DeviceOptions& opt) {
+    auto device = openDevice(opt);
+    if (!device) return 1;
+    const rhi::DeviceInfo& info = device->info();
+    const rhi::DeviceLimits& l = info.limits;
+    fmt::print("backend            {}\n", rhi::toString(info.backend));
+    fmt::print("api                {}\n", info.apiVersion);
+    fmt::print("device             {}\n", info.deviceName);
+    fmt::print("driver             {} {}\n", info.driverName, info.driverVersion);
+    fmt::print("platform           {}\n", info.platform);
+    fmt::print("limits\n");
+    fmt::print("  texture 2D/3D    {} / {} (array layers {})\n", l.maxTextureSize2D, l.maxTextureSize3D,
+               l.maxTextureArrayLayers);
+    fmt::print("  workgroup size   {} x {} x {} (invocations {})\n", l.maxComputeWorkgroupSize[0],
+               l.maxComputeWorkgroupSize[1], l.maxComputeWorkgroupSize[2], l.maxComputeWorkgroupInvocations);
+    fmt::print("  workgroup count  {} x {} x {}\n", l.maxComputeWorkgroupCount[0],
+               l.maxComputeWorkgroupCount[1], l.maxComputeWorkgroupCount[2]);
+    fmt::print("  storage buffer   {} bytes\n", l.maxStorageBufferRange);
+    fmt::print("  uniform buffer   {} bytes\n", l.maxUniformBufferRange);
+    fmt::print("  push constants   {} bytes, bind groups {}, colour targets {}\n", l.maxPushConstantSize,
+               l.maxBindGroups, l.maxColorTargets);
+    fmt::print("  timestamps       {} (period {} ns)\n", l.timestamps ? "yes" : "no", l.timestampPeriodNs);
+    fmt::print("  conservative depth {}\n", l.conservativeDepth ? "yes" : "no");
+    return 0;
+}
+
+void printTimings(const std::vector<penumbra::fg::PassTiming>& timings) {
+    double gpuTotal = 0, cpuTotal = 0;
+    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
+    for (const auto& t : timings) {
+        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", t.name, t.gpuMs, t.cpuMs);
+        if (std::isfinite(t.gpuMs)) gpuTotal += t.gpuMs;
+        cpuTotal += t.cpuMs;
+    }
+    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
+}
+
+int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width, uint32_t height,
+            const std::string& graphvizPath) {
+    auto device = openDevice(opt);
+    if (!device) return 1;
+    const rhi::DeviceInfo& info = device->info();
+    fmt::print("penumbra demo: {} on {} ({}), {}x{}\n", rhi::toString(info.backend), info.deviceName,
+               info.platform, width, height);
+    penumbra::demo::DemoSettings settings;
+    settings.width = width;
+    settings.height = height;
+    penumbra::demo::DemoResult r = penumbra::demo::renderDemoFrame(*device, settings);
+    if (!r.ok) {
+        penumbra::log::error("demo frame failed: {}", r.error);
+        return 1;
+    }
+    std::string err;
+    if (!penumbra::writePng(output, r.image, &err)) {
+        penumbra::log::error("{}", err);
+        return 1;
+    }
+    if (!graphvizPath.empty()) {
+        std::ofstream dot(graphvizPath);
+        dot << r.graphviz;
+        if (!dot) {
+            penumbra::log::error("{}: cannot write the frame-graph dump", graphvizPath);
+            return 1;
+        }
+    }
+    printTimings(r.timings);
+    fmt::print("wrote {}\n", output);
+    if (opt.validation && rhi::validationErrorCount(*device) != 0) {
+        penumbra::log::error("{} validation error(s) reported", rhi::validationErrorCount(*device));
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    CLI::App app{"penumbra — signed-distance-field rendering module: command-line front end"};
+    app.require_subcommand(1);
+
+    DeviceOptions infoOpt;
+    auto* info = app.add_subcommand("info", "Print the graphics device, driver and limits");
+    addDeviceOptions(info, infoOpt);
+
+    DeviceOptions demoOpt;
+    std::string output = "out/default.png", graphviz;
+    uint32_t width = 640, height = 360;
+    auto* demo =
+        app.add_subcommand("demo", "Render the RHI demo frame to a PNG and print per-pass GPU times");
+    addDeviceOptions(demo, demoOpt);
+    demo->add_option("-o,--output", output, "Output PNG path")->capture_default_str();
+    demo->add_option("--width", width, "Image width in pixels")
+        ->check(CLI::Range(1u, 8192u))
+        ->capture_default_str();
+    demo->add_option("--height", height, "Image height in pixels")
+        ->check(CLI::Range(1u, 8192u))
+        ->capture_default_str();
+    demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
+
+    CLI11_PARSE(app, argc, argv);
+    if (info->parsed()) return runInfo(infoOpt);
+    if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
+    return 2;
+}
