@@ -132,6 +132,8 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
 int main(int argc, char** argv) {
     CLI::App app{"penumbra — signed-distance-field rendering module: command-line front end"};
     app.require_subcommand(1);
+    bool verbose = false;
+    app.add_flag("-v,--verbose", verbose, "Also print informational and debug messages from the device");
 
     DeviceOptions infoOpt;
     auto* info = app.add_subcommand("info", "Print the graphics device, driver and limits");
@@ -152,7 +154,14 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
 
-    CLI11_PARSE(app, argc, argv);
+    try {
+        app.parse(argc, argv);
+    } catch (const CLI::ParseError& e) {
+        // --help / --version exit 0; every usage error exits 2 with CLI11's message.
+        return app.exit(e) == 0 ? 0 : 2;
+    }
+    penumbra::log::setMinSeverity(verbose ? penumbra::log::Severity::Debug
+                                          : penumbra::log::Severity::Warning);
     if (info->parsed()) return runInfo(infoOpt);
     if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
     return 2;
