@@ -63,7 +63,7 @@ bool readPng(const std::string& path, ImageRGBA8& out, std::string* error) {
     // with destructors are created in that range.
     std::vector<png_bytep>* rows = new std::vector<png_bytep>();
     ImageRGBA8* img = new ImageRGBA8();
-    bool ok = false;
+    volatile bool ok = false;  // modified between setjmp and a possible longjmp
     if (setjmp(state.jump) == 0) {
         png_set_user_limits(png, 16384, 16384);
         png_init_io(png, file.get());

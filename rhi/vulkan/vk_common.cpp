@@ -107,10 +107,14 @@ constexpr VkPipelineStageFlags2 kDepthStages =
 AccessScope accessScope(Access a, bool asSource) {
     AccessScope s;
     if (a == Access::None) {
-        // "Discard": no memory to make available, but the transition (or reuse) must still wait
-        // for every earlier use of the resource (write-after-read), so as a source it covers all
-        // commands. As a destination nothing waits.
-        if (asSource) s.stages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+        // "Discard": the contents are not needed, but the transition (or the reuse of a pooled or
+        // aliased resource) must still wait for every earlier use (write-after-read) and order
+        // itself after earlier writes (write-after-write), so as a source it covers all commands
+        // and all memory writes. As a destination nothing waits.
+        if (asSource) {
+            s.stages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+            s.access = VK_ACCESS_2_MEMORY_WRITE_BIT;
+        }
         return s;
     }
     auto add = [&](Access bit, VkPipelineStageFlags2 stages, VkAccessFlags2 access) {

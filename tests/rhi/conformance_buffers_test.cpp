@@ -110,6 +110,7 @@ TEST_P(ConformanceBuffers, UpdateFillCopyThroughCommandList) {
 
     CommandList& cmd = dev().beginCommandList("update fill copy");
     cmd.fillBuffer(x, 0, 1024, 0xDEADBEEFu);
+    cmd.barrier(Barrier::buf(x, Access::CopyDst, Access::CopyDst));  // write-after-write on [512, 576)
     cmd.fillBuffer(x, 512, 64, 0x01020304u);
     cmd.barrier(Barrier::buf(x, Access::CopyDst, Access::CopyDst));
     cmd.updateBuffer(x, 128, update.data(), update.size() * 4);
