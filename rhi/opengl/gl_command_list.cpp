@@ -10,7 +10,13 @@ namespace rhi::gl {
 namespace {
 
 std::string quoted(std::string_view name) {
-    return name.empty() ? std::string("(unnamed)") : "'" + std::string(name) + "'";
+    if (name.empty()) return "(unnamed)";
+    std::string out;
+    out.reserve(name.size() + 2);
+    out += '\'';
+    out.append(name.data(), name.size());
+    out += '\'';
+    return out;
 }
 
 // glMemoryBarrier bits that make writes visible to the accesses in `after`.
