@@ -10,9 +10,3 @@ int main(int argc, char** argv) {
     return RUN_ALL_TESTS();
 }
 
-#if defined(__SANITIZE_ADDRESS__)
-// Mesa's drivers are dlclose()d before LeakSanitizer symbolises its report, which then shows a
-// spurious 128-byte leak with no stack. Keeping shared objects loaded removes it; real leaks in
-// our code are still reported.
-extern "C" int dlclose(void*) { return 0; }
-#endif
