@@ -1,6 +1,9 @@
 // penumbra — command-line front end.
 //   penumbra info [--backend vulkan|gl]      device, driver and limits
 //   penumbra demo -o out.png [--backend] [--width --height]   the RHI demo frame + timing table
+//   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
+//   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
+// Exit codes: 0 ok, 1 runtime error, 2 usage error.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -10,6 +13,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "cmd_sdf.h"
 #include "engine/core/log.h"
 #include "engine/image/image.h"
 #include "renderer/demo/rhi_demo.h"
@@ -154,6 +158,14 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
 
+    penumbra::cli::BakeOptions bakeOpt;
+    auto* bake = penumbra::cli::addBakeCommand(app, bakeOpt);
+    penumbra::cli::SdfInfoOptions sdfInfoOpt;
+    penumbra::cli::SdfSampleOptions sdfSampleOpt;
+    CLI::App* sdfInfo = nullptr;
+    CLI::App* sdfSample = nullptr;
+    penumbra::cli::addSdfCommand(app, sdfInfoOpt, sdfSampleOpt, &sdfInfo, &sdfSample);
+
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
@@ -164,5 +176,12 @@ int main(int argc, char** argv) {
                                           : penumbra::log::Severity::Warning);
     if (info->parsed()) return runInfo(infoOpt);
     if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
+    if (bake->parsed()) {
+        std::string commandLine;
+        for (int i = 0; i < argc; ++i) commandLine += (i ? " " : "") + std::string(argv[i]);
+        return penumbra::cli::runBake(bakeOpt, commandLine);
+    }
+    if (sdfInfo->parsed()) return penumbra::cli::runSdfInfo(sdfInfoOpt);
+    if (sdfSample->parsed()) return penumbra::cli::runSdfSample(sdfSampleOpt);
     return 2;
 }

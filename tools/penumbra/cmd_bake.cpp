@@ -1,0 +1,295 @@
+// penumbra bake: mesh -> .psdf, with a phase-timed summary and an optional JSON report
+// (schema in docs/FORMATS.md).
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "cmd_sdf.h"
+#include "engine/assets/mesh.h"
+#include "engine/core/log.h"
+#include "engine/core/progress.h"
+#include "engine/sdf/bake.h"
+#include "engine/sdf/psdf.h"
+
+namespace penumbra::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+sdf::PsdfSign toPsdfSign(sdf::SignMethod m) {
+    switch (m) {
+        case sdf::SignMethod::Winding:
+            return sdf::PsdfSign::Winding;
+        case sdf::SignMethod::Pseudonormal:
+            return sdf::PsdfSign::Pseudonormal;
+        case sdf::SignMethod::Parity:
+            return sdf::PsdfSign::Parity;
+        case sdf::SignMethod::Auto:
+            break;
+    }
+    return sdf::PsdfSign::Unknown;
+}
+
+const char* toString(sdf::BakeQuality q) {
+    switch (q) {
+        case sdf::BakeQuality::Low:
+            return "low";
+        case sdf::BakeQuality::Medium:
+            return "medium";
+        case sdf::BakeQuality::High:
+            return "high";
+    }
+    return "medium";
+}
+
+nlohmann::ordered_json vec3Json(const glm::dvec3& v) {
+    return nlohmann::ordered_json::array({v.x, v.y, v.z});
+}
+
+std::string humanBytes(uint64_t b) {
+    if (b >= (1ull << 20)) return fmt::format("{:.1f} MiB", double(b) / double(1ull << 20));
+    if (b >= (1ull << 10)) return fmt::format("{:.1f} KiB", double(b) / 1024.0);
+    return fmt::format("{} B", b);
+}
+
+}  // namespace
+
+CLI::App* addBakeCommand(CLI::App& app, BakeOptions& opt) {
+    auto* cmd = app.add_subcommand(
+        "bake", "Bake a triangle mesh into a signed distance field (.psdf, see docs/FORMATS.md)");
+    cmd->add_option("mesh", opt.input, "Input mesh: .gltf, .glb, .obj or .ply")->required();
+    cmd->add_option("-o,--output", opt.output, "Output .psdf file")->required();
+    auto* res =
+        cmd->add_option("--resolution", opt.resolution, "Voxels along the longest axis of the padded grid")
+            ->check(CLI::Range(1u, 4096u));
+    auto* vs = cmd->add_option("--voxel-size", opt.voxelSize, "Voxel edge length in mesh units")
+                   ->check(CLI::PositiveNumber);
+    res->excludes(vs);
+    vs->excludes(res);
+    cmd->add_option("--padding", opt.padding, "Empty voxels added on every side of the mesh bounds")
+        ->check(CLI::Range(0u, 256u))
+        ->capture_default_str();
+    cmd->add_option("--sign", opt.sign,
+                    "Inside/outside method: auto (closed manifold -> pseudonormal, otherwise winding), "
+                    "winding, pseudonormal or parity")
+        ->check(CLI::IsMember({"auto", "winding", "pseudonormal", "parity"}))
+        ->capture_default_str();
+    cmd->add_option("--threads", opt.threads, "Worker threads (0 = all hardware threads)")
+        ->check(CLI::Range(0u, 1024u))
+        ->capture_default_str();
+    cmd->add_option("--report", opt.report, "Also write a JSON report (mesh diagnostics, timings, settings)");
+    cmd->add_option("--encoding", opt.encoding, "Payload encoding: f32, f16 or u8 (8-bit narrow band)")
+        ->check(CLI::IsMember({"f32", "f16", "u8"}))
+        ->capture_default_str();
+    opt.bandWidthOption =
+        cmd->add_option("--band-width", opt.bandWidthVoxels,
+                        "u8 only: half-width of the narrow band in voxels (distances beyond are clamped)")
+            ->check(CLI::PositiveNumber)
+            ->capture_default_str();
+    cmd->add_option("--quality", opt.quality,
+                    "Automatic resolution when neither --resolution nor --voxel-size is given: low, medium "
+                    "or high = 64, 128 or 256 voxels along the longest axis, up to twice that for "
+                    "elongated meshes (docs/FORMATS.md)")
+        ->check(CLI::IsMember({"low", "medium", "high"}))
+        ->capture_default_str();
+    cmd->add_flag("-q,--quiet", opt.quiet, "No progress bar and no summary; errors only");
+    return cmd;
+}
+
+int runBake(const BakeOptions& opt, const std::string& commandLine) {
+    const Clock::time_point tStart = Clock::now();
+
+    sdf::BakeSettings settings;
+    if (!sdf::parseSignMethod(opt.sign, settings.sign)) {
+        log::error("bake: unknown sign method '{}'", opt.sign);
+        return 2;
+    }
+    sdf::PsdfEncoding encoding;
+    if (!sdf::parsePsdfEncoding(opt.encoding, encoding)) {
+        log::error("bake: unknown encoding '{}'", opt.encoding);
+        return 2;
+    }
+    if (encoding != sdf::PsdfEncoding::U8 && opt.bandWidthOption && opt.bandWidthOption->count() > 0) {
+        log::error("bake: --band-width applies to --encoding u8 only (encoding is {})", opt.encoding);
+        return 2;
+    }
+    if (opt.resolution > 0 && opt.resolution <= 2 * opt.padding) {
+        log::error("bake: --resolution {} must exceed twice the padding ({} voxels on each side)",
+                   opt.resolution, opt.padding);
+        return 2;
+    }
+    settings.resolution = opt.resolution;
+    settings.voxelSize = opt.voxelSize;
+    settings.padding = opt.padding;
+    settings.threads = opt.threads;
+    settings.quality = opt.quality == "low"    ? sdf::BakeQuality::Low
+                       : opt.quality == "high" ? sdf::BakeQuality::High
+                                               : sdf::BakeQuality::Medium;
+
+    // load
+    Clock::time_point t0 = Clock::now();
+    assets::MeshData mesh;
+    std::string error;
+    if (!assets::loadMesh(opt.input, mesh, error)) {
+        log::error("bake: {}", error);
+        return 1;
+    }
+    const double loadMs = msSince(t0);
+
+    // cleanup, bvh, distance, sign
+    StderrProgressOutput progressOut;
+    ProgressSettings progressSettings;
+    progressSettings.enabled = !opt.quiet;
+    sdf::BakeResult result;
+    {
+        ProgressBar bar(progressOut, progressSettings);
+        settings.progress = [&bar](double fraction, const char* phase) { bar.update(fraction, phase); };
+        result = sdf::bake(mesh, settings);
+        bar.finish();
+    }
+    if (!result.ok) {
+        log::error("bake: {}: {}", opt.input, result.error);
+        return 1;
+    }
+    const sdf::SdfGrid& grid = result.grid;
+    const sdf::MeshDiagnostics& diag = result.diagnostics;
+
+    // write
+    t0 = Clock::now();
+    sdf::PsdfWriteOptions wo;
+    wo.encoding = encoding;
+    wo.bandWidth = encoding == sdf::PsdfEncoding::U8 ? opt.bandWidthVoxels * grid.voxelSize : 0.0;
+    wo.sign = toPsdfSign(result.signUsed);
+    wo.closedManifold = diag.closedManifold;
+    wo.boundaryEdges = diag.boundaryEdges > 0;
+    wo.nonManifold = diag.nonManifoldEdges > 0;
+    wo.boundsMin = diag.boundsMin;
+    wo.boundsMax = diag.boundsMax;
+    if (!sdf::writePsdf(opt.output, grid, wo, error)) {
+        log::error("bake: {}", error);
+        return 1;
+    }
+    const double writeMs = msSince(t0);
+    const double totalMs = msSince(tStart);
+    const uint64_t fileBytes =
+        sdf::kPsdfHeaderBytes + uint64_t(grid.distances.size()) * sdf::bytesPerVoxel(encoding);
+
+    const char* resolutionSource = opt.resolution      ? "--resolution"
+                                   : opt.voxelSize > 0 ? "--voxel-size"
+                                                       : "automatic";
+    const uint32_t longest = std::max({grid.dims.x, grid.dims.y, grid.dims.z});
+
+    if (!opt.report.empty()) {
+        nlohmann::ordered_json j;
+        j["format"] = "penumbra-bake-report";
+        j["version"] = 1;
+        j["commandLine"] = commandLine;
+        j["input"] = opt.input;
+        j["output"] = opt.output;
+        j["mesh"] = {
+            {"inputTriangles", diag.inputTriangles},
+            {"inputVertices", diag.inputVertices},
+            {"triangles", diag.triangles},
+            {"vertices", diag.vertices},
+            {"boundaryEdges", diag.boundaryEdges},
+            {"nonManifoldEdges", diag.nonManifoldEdges},
+            {"degenerateTrianglesRemoved", diag.degenerateTrianglesRemoved},
+            {"duplicateTrianglesRemoved", diag.duplicateTrianglesRemoved},
+            {"duplicateVerticesMerged", diag.duplicateVerticesMerged},
+            {"closedManifold", diag.closedManifold},
+            {"bbox", {{"min", vec3Json(diag.boundsMin)}, {"max", vec3Json(diag.boundsMax)}}},
+        };
+        j["grid"] = {
+            {"dims", {grid.dims.x, grid.dims.y, grid.dims.z}},
+            {"voxelSize", grid.voxelSize},
+            {"origin", vec3Json(grid.origin)},
+            {"voxels", uint64_t(grid.distances.size())},
+            {"encoding", sdf::toString(encoding)},
+            {"bandWidth", wo.bandWidth},
+            {"fileBytes", fileBytes},
+        };
+        j["distance"] = {{"min", result.minDistance}, {"max", result.maxDistance}};
+        j["sign"] = {{"requested", opt.sign},
+                     {"method", sdf::toString(result.signUsed)},
+                     {"reason", result.signReason}};
+        j["timingsMs"] = {
+            {"load", loadMs},
+            {"cleanup", result.timings.cleanupMs},
+            {"bvh", result.timings.bvhMs},
+            {"distance", result.timings.distanceMs},
+            {"sign", result.timings.signMs},
+            {"write", writeMs},
+            {"total", totalMs},
+        };
+        j["settings"] = {
+            {"resolution", opt.resolution},
+            {"voxelSize", opt.voxelSize},
+            {"padding", opt.padding},
+            {"sign", opt.sign},
+            {"threads", opt.threads},
+            {"quality", toString(settings.quality)},
+            {"encoding", opt.encoding},
+            {"bandWidthVoxels", encoding == sdf::PsdfEncoding::U8
+                                    ? nlohmann::ordered_json(opt.bandWidthVoxels)
+                                    : nlohmann::ordered_json()},
+            {"resolutionSource", resolutionSource},
+            {"automaticResolution", sdf::automaticResolution(diag, settings.quality)},
+        };
+        std::ofstream out(opt.report);
+        out << j.dump(2) << "\n";
+        out.close();
+        if (!out) {
+            log::error("bake: {}: cannot write the report", opt.report);
+            return 1;
+        }
+    }
+
+    if (opt.quiet) return 0;
+    fmt::print("penumbra bake: {} -> {}\n", opt.input, opt.output);
+    fmt::print("mesh        {} triangles, {} vertices (input {} / {})\n", diag.triangles, diag.vertices,
+               diag.inputTriangles, diag.inputVertices);
+    fmt::print("topology    {} boundary edges, {} non-manifold edges{}\n", diag.boundaryEdges,
+               diag.nonManifoldEdges, diag.closedManifold ? " (closed manifold)" : "");
+    fmt::print("clean-up    {} degenerate and {} duplicate triangles removed, {} duplicate vertices merged\n",
+               diag.degenerateTrianglesRemoved, diag.duplicateTrianglesRemoved, diag.duplicateVerticesMerged);
+    fmt::print("bounds      ({:.6g}, {:.6g}, {:.6g}) .. ({:.6g}, {:.6g}, {:.6g})\n", diag.boundsMin.x,
+               diag.boundsMin.y, diag.boundsMin.z, diag.boundsMax.x, diag.boundsMax.y, diag.boundsMax.z);
+    const std::string sourceText = opt.resolution || opt.voxelSize > 0
+                                       ? fmt::format("from {}", resolutionSource)
+                                       : fmt::format("automatic, quality {}", toString(settings.quality));
+    fmt::print("grid        {} x {} x {}, voxel size {:.6g} ({} along the longest axis, {}; padding {})\n",
+               grid.dims.x, grid.dims.y, grid.dims.z, grid.voxelSize, longest, sourceText, opt.padding);
+    if (opt.sign == "auto")
+        fmt::print("sign        {} (auto: {})\n", sdf::toString(result.signUsed), result.signReason);
+    else
+        fmt::print("sign        {} (requested{}{})\n", sdf::toString(result.signUsed),
+                   result.signReason.empty() ? "" : "; ", result.signReason);
+    fmt::print("distance    min {:.6g}  max {:.6g}  ({:.3f} .. {:.3f} voxels)\n", result.minDistance,
+               result.maxDistance, result.minDistance / grid.voxelSize, result.maxDistance / grid.voxelSize);
+    fmt::print("output      {} encoding, {}\n", sdf::toString(encoding), humanBytes(fileBytes));
+    fmt::print("{:<10} {:>10}\n", "phase", "ms");
+    const std::pair<const char*, double> phases[] = {
+        {"load", loadMs},
+        {"cleanup", result.timings.cleanupMs},
+        {"bvh", result.timings.bvhMs},
+        {"distance", result.timings.distanceMs},
+        {"sign", result.timings.signMs},
+        {"write", writeMs},
+        {"total", totalMs},
+    };
+    for (const auto& [name, ms] : phases) fmt::print("{:<10} {:>10.1f}\n", name, ms);
+    if (!opt.report.empty()) fmt::print("report      {}\n", opt.report);
+    fmt::print("wrote {}\n", opt.output);
+    return 0;
+}
+
+}  // namespace penumbra::cli
