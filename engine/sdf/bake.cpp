@@ -13,6 +13,13 @@
 // rule applies again, down to 2x2x2 cells whose voxels are all corners, i.e. evaluated exactly.
 // So the winding number is evaluated on the coarse lattice, in a band of about one voxel around
 // the surface and around the (open meshes') w = 0.5 level set away from the surface.
+//
+// auto on a closed, consistently oriented mesh: the angle-weighted pseudonormal of each voxel's
+// closest feature gives the sign for free during the distance queries. It is then checked: the sign
+// may only change between neighbours whose segment can cross the surface (d(u) + d(v) <= voxel);
+// where it changes between neighbours farther out, the mesh intersects or touches itself or holds
+// nested shells, and the winding number (signed ray crossings, exact for closed meshes) corrects
+// the affected region by spreading from those voxels (see bake()).
 #include "engine/sdf/bake.h"
 
 #include <algorithm>
@@ -20,10 +27,13 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <exception>
 #include <functional>
 #include <limits>
 #include <memory>
 #include <mutex>
+#include <new>
+#include <stdexcept>
 #include <system_error>
 #include <thread>
 
@@ -99,19 +109,28 @@ void parallelFor(uint32_t threads, size_t count, const std::function<void(size_t
     if (count == 0) return;
     std::atomic<size_t> next{0};
     std::atomic<size_t> done{0};
+    std::atomic<bool> failed{false};
+    std::exception_ptr error;  // first exception of a worker, rethrown here after the join
     std::mutex mutex;
     std::condition_variable cv;
     auto work = [&] {
-        for (;;) {
-            const size_t task = next.fetch_add(1);
-            if (task >= count) break;
-            fn(task);
-            if (done.fetch_add(1) + 1 == count && progress) {
-                // Under the mutex, so the coordinator cannot miss the wake-up between its check
-                // and its wait.
-                std::lock_guard lock(mutex);
-                cv.notify_all();
+        try {
+            for (;;) {
+                const size_t task = next.fetch_add(1);
+                if (task >= count || failed.load()) break;
+                fn(task);
+                if (done.fetch_add(1) + 1 == count && progress) {
+                    // Under the mutex, so the coordinator cannot miss the wake-up between its
+                    // check and its wait.
+                    std::lock_guard lock(mutex);
+                    cv.notify_all();
+                }
             }
+        } catch (...) {
+            std::lock_guard lock(mutex);
+            if (!error) error = std::current_exception();
+            failed = true;
+            cv.notify_all();
         }
     };
     const size_t workers = std::min<size_t>(threads, count);
@@ -127,12 +146,13 @@ void parallelFor(uint32_t threads, size_t count, const std::function<void(size_t
     if (pool.empty()) work();  // no thread could be started: do it here
     if (progress) {
         std::unique_lock lock(mutex);
-        while (done.load() < count) {
+        while (done.load() < count && !failed.load()) {
             cv.wait_for(lock, std::chrono::milliseconds(100));
-            progress(double(done.load()) / double(count));
+            if (!failed.load()) progress(double(done.load()) / double(count));
         }
     }
     for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
 }
 
 struct Placement {
@@ -383,35 +403,36 @@ std::vector<uint32_t> latticeAxis(uint32_t n, uint32_t step) {
 
 }  // namespace
 
-BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
-    BakeResult result;
+namespace {
+
+void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeResult& result) {
     const Clock::time_point start = Clock::now();
     const uint32_t threads =
         settings.threads ? settings.threads : std::max(1u, std::thread::hardware_concurrency());
     CleanMesh clean;
     if (!cleanMesh(mesh, clean, result.error, threads)) {
         result.diagnostics = clean.diagnostics;
-        return result;
+        return;
     }
     result.diagnostics = clean.diagnostics;
     result.timings.cleanupMs = msSince(start);
     if (clean.triangles.empty()) {
         result.error = fmt::format("mesh has no non-degenerate triangles ({} degenerate removed)",
                                    clean.diagnostics.degenerateTrianglesRemoved);
-        return result;
+        return;
     }
 
     Placement placement;
-    if (!placeGrid(clean.diagnostics, settings, placement, result.error)) return result;
+    if (!placeGrid(clean.diagnostics, settings, placement, result.error)) return;
 
     // Sign method.
     const MeshDiagnostics& diag = clean.diagnostics;
     SignMethod method = settings.sign;
-    bool verifyPseudonormal = false;
+    bool repairPseudonormal = false;
     if (method == SignMethod::Auto) {
         if (diag.closedManifold && diag.inconsistentEdges == 0) {
             method = SignMethod::Pseudonormal;
-            verifyPseudonormal = true;
+            repairPseudonormal = true;
         } else if (diag.closedManifold) {
             method = SignMethod::Winding;
             result.signReason =
@@ -428,9 +449,7 @@ BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
     }
 
     // Progress: distance first, then the sign; reported as one fraction of the whole bake.
-    const double distanceShare = method == SignMethod::Pseudonormal && !verifyPseudonormal ? 1.0
-                                 : method == SignMethod::Pseudonormal                      ? 0.9
-                                                                                           : 0.6;
+    const double distanceShare = method == SignMethod::Pseudonormal ? (repairPseudonormal ? 0.97 : 1.0) : 0.6;
     auto report = [&](double fraction, const char* phase) {
         if (settings.progress) settings.progress(std::clamp(fraction, 0.0, 1.0), phase);
     };
@@ -504,7 +523,7 @@ BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
         if (!solver) solver = std::make_unique<SignSolver>(grid, originLocal, *winding, parity);
     };
 
-    if (verifyPseudonormal) {
+    if (repairPseudonormal) {
         // A closed, consistently oriented mesh can still intersect itself, hold nested shells or
         // touch itself at a vertex; there the closest feature's side is not the inside/outside of
         // the winding number. Such errors give themselves away: the sign can only change between
@@ -678,6 +697,24 @@ BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
     result.maxDistance = hi;
     result.ok = true;
     report(1, "sign");
+    return;
+}
+
+}  // namespace
+
+BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
+    BakeResult result;
+    try {
+        bakeImpl(mesh, settings, result);
+    } catch (const std::bad_alloc&) {
+        const glm::uvec3 d = result.grid.dims;
+        result = BakeResult{};
+        result.error = d.x ? fmt::format("out of memory baking a {}x{}x{} grid", d.x, d.y, d.z)
+                           : std::string("out of memory preparing the mesh for baking");
+    } catch (const std::length_error&) {
+        result = BakeResult{};
+        result.error = "out of memory (allocation too large) while baking";
+    }
     return result;
 }
 

@@ -5,6 +5,8 @@
 #include <bit>
 #include <cfloat>
 #include <cmath>
+#include <exception>
+#include <mutex>
 #include <system_error>
 #include <thread>
 
@@ -395,17 +397,28 @@ struct Builder4 {
 template <typename Fn>
 void parallelChunks(uint32_t threads, size_t count, Fn fn) {
     const size_t parts = std::max<size_t>(1, std::min<size_t>(threads, count / 4096));
+    std::exception_ptr error;  // first exception of any part, rethrown after the join
+    std::mutex mutex;
+    auto run = [&](size_t b, size_t e) {
+        try {
+            fn(b, e);
+        } catch (...) {
+            std::lock_guard lock(mutex);
+            if (!error) error = std::current_exception();
+        }
+    };
     std::vector<std::thread> pool;
     for (size_t w = 1; w < parts; ++w) {
         const size_t b = count * w / parts, e = count * (w + 1) / parts;
         try {
-            pool.emplace_back(fn, b, e);
+            pool.emplace_back(run, b, e);
         } catch (const std::system_error&) {
-            fn(b, e);
+            run(b, e);
         }
     }
-    fn(size_t(0), count / parts);
+    run(size_t(0), count / parts);
     for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
 }
 
 }  // namespace

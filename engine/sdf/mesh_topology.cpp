@@ -3,6 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <exception>
+#include <mutex>
+#include <new>
+#include <stdexcept>
 #include <system_error>
 #include <thread>
 
@@ -78,17 +82,28 @@ uint32_t partsFor(uint32_t threads, size_t work) {
 // Runs fn(part, begin, end) over `parts` contiguous ranges of [0, n), part 0 on the calling thread.
 template <typename Fn>
 void forParts(uint32_t parts, size_t n, Fn&& fn) {
+    std::exception_ptr error;  // first exception of any part, rethrown after the join
+    std::mutex mutex;
+    auto run = [&](uint32_t part, size_t b, size_t e) {
+        try {
+            fn(part, b, e);
+        } catch (...) {
+            std::lock_guard lock(mutex);
+            if (!error) error = std::current_exception();
+        }
+    };
     std::vector<std::thread> pool;
     for (uint32_t part = 1; part < parts; ++part) {
         const size_t b = n * part / parts, e = n * (part + 1) / parts;
         try {
-            pool.emplace_back([&fn, part, b, e] { fn(part, b, e); });
+            pool.emplace_back(run, part, b, e);
         } catch (const std::system_error&) {
-            fn(part, b, e);
+            run(part, b, e);
         }
     }
-    fn(0u, size_t(0), n / parts);
+    run(0u, size_t(0), n / parts);
     for (std::thread& t : pool) t.join();
+    if (error) std::rethrow_exception(error);
 }
 
 }  // namespace
@@ -97,7 +112,9 @@ bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error)
     return cleanMesh(mesh, out, error, 1);
 }
 
-bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error, uint32_t threads) {
+namespace {
+
+bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& error, uint32_t threads) {
     out = CleanMesh{};
     MeshDiagnostics& diag = out.diagnostics;
     const size_t vertexCount = mesh.positions.size();
@@ -349,21 +366,42 @@ bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error,
             rowSize[u] = n;
         }
     });
-    uint32_t used = 0;
+    // Used vertices (non-empty rows) are numbered in order: per part counts, then offsets.
+    std::vector<uint32_t> partUsed(parts + 1, 0), partRows(parts + 1, 0);
+    std::vector<glm::dvec3> partLo(parts, glm::dvec3(INFINITY)), partHi(parts, glm::dvec3(-INFINITY));
+    forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
+        uint32_t n = 0, rows = 0;
+        for (size_t u = vb; u < ve; ++u) {
+            if (rowSize[u] == 0) continue;
+            ++n;
+            rows += rowSize[u];
+            const glm::dvec3 p(mesh.positions[uniqueSource[u]]);
+            partLo[part] = glm::min(partLo[part], p);
+            partHi[part] = glm::max(partHi[part], p);
+        }
+        partUsed[part + 1] = n;
+        partRows[part + 1] = rows;
+    });
     glm::dvec3 lo(INFINITY), hi(-INFINITY);
-    std::vector<uint32_t> newStart;
-    reserveHuge(newStart, uniqueCount + 1);
-    uint32_t write = 0;
-    for (size_t u = 0; u < uniqueCount; ++u) {
-        if (rowSize[u] == 0) continue;
-        compact[u] = used++;
-        newStart.push_back(write);
-        write += rowSize[u];
-        const glm::dvec3 p(mesh.positions[uniqueSource[u]]);
-        lo = glm::min(lo, p);
-        hi = glm::max(hi, p);
+    for (uint32_t part = 0; part < parts; ++part) {
+        partUsed[part + 1] += partUsed[part];
+        partRows[part + 1] += partRows[part];
+        lo = glm::min(lo, partLo[part]);
+        hi = glm::max(hi, partHi[part]);
     }
-    newStart.push_back(write);
+    const uint32_t used = partUsed[parts];
+    std::vector<uint32_t> newStart;
+    resizeHuge(newStart, size_t(used) + 1, 0u);
+    forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
+        uint32_t id = partUsed[part], start = partRows[part];
+        for (size_t u = vb; u < ve; ++u) {
+            if (rowSize[u] == 0) continue;
+            compact[u] = id;
+            newStart[id++] = start;
+            start += rowSize[u];
+        }
+    });
+    newStart[used] = partRows[parts];
     out.separateWinding = windingDiffers;
     if (windingDiffers) {
         reserveHuge(out.windingTriangles, tris.size());
@@ -415,6 +453,21 @@ bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error,
         }
     });
     return true;
+}
+
+}  // namespace
+
+bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error, uint32_t threads) {
+    try {
+        return cleanMeshImpl(mesh, out, error, threads);
+    } catch (const std::bad_alloc&) {
+        out = CleanMesh{};
+        error = fmt::format("out of memory cleaning a mesh of {} triangles", mesh.indices.size() / 3);
+    } catch (const std::length_error&) {
+        out = CleanMesh{};
+        error = fmt::format("out of memory cleaning a mesh of {} triangles", mesh.indices.size() / 3);
+    }
+    return false;
 }
 
 }  // namespace penumbra::sdf

@@ -157,4 +157,38 @@ TEST(TriangleBvh, EdgeCases) {
     EXPECT_DOUBLE_EQ(hit.distance, 1.0);
 }
 
+// Metric: signed ray crossings equal the winding number of closed meshes: 1 inside a sphere, 0
+// outside, 2 inside two nested spheres, -1 inside an inverted sphere; at 300 random points and
+// three ray directions each (the rays are not axis-aligned).
+TEST(TriangleBvh, SignedCrossingsAreTheWindingNumberOfClosedMeshes) {
+    Soup outer = fromMesh(test::icosphere(3, 1.0f));
+    Soup both = outer;
+    const Soup inner = fromMesh(test::icosphere(2, 0.5f));
+    const uint32_t base = static_cast<uint32_t>(both.positions.size());
+    both.positions.insert(both.positions.end(), inner.positions.begin(), inner.positions.end());
+    for (const glm::uvec3& t : inner.triangles) both.triangles.push_back(t + base);
+    Soup inverted = outer;
+    for (glm::uvec3& t : inverted.triangles) std::swap(t.y, t.z);
+    TriangleBvh a, b, c;
+    a.build(outer.positions, outer.triangles, 1);
+    b.build(both.positions, both.triangles, 2);
+    c.build(inverted.positions, inverted.triangles, 1);
+    std::mt19937 rng(11);
+    std::uniform_real_distribution<double> u(-1.5, 1.5);
+    const glm::dvec3 dirs[3] = {{0.75, 0.57, 0.32}, {-0.43, 0.78, 0.45}, {0.28, -0.38, 0.88}};
+    int checked = 0;
+    for (int i = 0; i < 300; ++i) {
+        const glm::dvec3 p(u(rng), u(rng), u(rng));
+        const double r = glm::length(p);
+        if (std::abs(r - 1.0) < 0.05 || std::abs(r - 0.5) < 0.05) continue;  // polygon vs sphere
+        ++checked;
+        for (const glm::dvec3& d : dirs) {
+            EXPECT_EQ(a.signedCrossings(p, d), r < 1 ? 1 : 0);
+            EXPECT_EQ(b.signedCrossings(p, d), (r < 1 ? 1 : 0) + (r < 0.5 ? 1 : 0));
+            EXPECT_EQ(c.signedCrossings(p, d), r < 1 ? -1 : 0);
+        }
+    }
+    EXPECT_GT(checked, 200);
+}
+
 }  // namespace
