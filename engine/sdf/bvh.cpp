@@ -24,9 +24,10 @@ namespace {
 
 constexpr uint32_t kMaxLeafSize = TriangleBvh::kMaxLeafTriangles;
 constexpr uint32_t kPancakeTriangles = TriangleBvh::kPancakeTriangles;
-// Traversal stack: at most 3 entries per level of the 4-wide tree, each level making at least one
-// split: 30 code bits + 32 halvings of equal codes.
-constexpr int kStackSize = 3 * 64 + 4;
+// Traversal stack: at most 3 pending siblings per level of the 4-wide tree plus one node's four
+// children. Every level splits each path at least once: at most 30 splits on code bits, 31
+// halvings of equal codes and one halving of a small range, so depth <= 62.
+constexpr int kStackSize = 3 * 64 + 16;
 
 using Node4 = TriangleBvh::Node4;
 
@@ -42,7 +43,7 @@ float floatUp(double v) {
     return f;
 }
 
-uint64_t spreadBits(uint64_t x) {  // 21 bits -> every third bit of 63
+uint64_t spreadBits(uint64_t x) {  // up to 21 bits -> every third bit
     x &= 0x1fffff;
     x = (x | x << 32) & 0x1f00000000ffffull;
     x = (x | x << 16) & 0x1f0000ff0000ffull;
