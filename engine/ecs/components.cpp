@@ -127,8 +127,8 @@ TransformUpdateStats updateTransforms(World& world) {
     Transform* transforms = pool->components();
     const Entity* entities = pool->entities();
 
-    enum : uint8_t { kTodo, kOnPath, kDone };
-    std::vector<uint8_t> state(n, kTodo);
+    enum : uint8_t { kUnvisited, kOnPath, kDone };
+    std::vector<uint8_t> state(n, kUnvisited);
     std::vector<uint32_t> path;  // a chain child -> ancestors still to compute
 
     // Dense position of the parent's Transform, or kAbsent for a root.
