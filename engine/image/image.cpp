@@ -5,6 +5,7 @@
 
 #include <csetjmp>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
@@ -38,26 +39,34 @@ void pngError(png_structp png, png_const_charp msg) {
     std::longjmp(state->jump, 1);
 }
 void pngWarning(png_structp, png_const_charp) {}
-}  // namespace
 
-bool readPng(const std::string& path, ImageRGBA8& out, std::string* error) {
-    auto fail = [&](const std::string& why) {
-        if (error) *error = path + ": " + why;
-        return false;
-    };
-    std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
-    if (!file) return fail("cannot open file");
-    png_byte header[8];
-    if (std::fread(header, 1, 8, file.get()) != 8 || png_sig_cmp(header, 0, 8) != 0)
-        return fail("not a PNG file");
+// Bytes of a PNG held in memory, consumed by pngReadMemory.
+struct PngMemorySource {
+    const uint8_t* data = nullptr;
+    size_t size = 0;
+    size_t offset = 0;
+};
+void pngReadMemory(png_structp png, png_bytep out, png_size_t count) {
+    auto* src = static_cast<PngMemorySource*>(png_get_io_ptr(png));
+    if (count > src->size - src->offset) png_error(png, "truncated data (unexpected end of the image)");
+    std::memcpy(out, src->data + src->offset, count);
+    src->offset += count;
+}
 
+// Decodes the PNG after its 8-byte signature, from `file` or else from `memory`. False with the
+// reason in `message` (libpng's text, if any).
+bool decodePng(FILE* file, PngMemorySource* memory, ImageRGBA8& out, std::string& message) {
     PngErrorState state;
     png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, &state, pngError, pngWarning);
-    if (!png) return fail("out of memory");
+    if (!png) {
+        message = "out of memory";
+        return false;
+    }
     png_infop info = png_create_info_struct(png);
     if (!info) {
         png_destroy_read_struct(&png, nullptr, nullptr);
-        return fail("out of memory");
+        message = "out of memory";
+        return false;
     }
     // Everything that may longjmp lives between setjmp and the destroy call below; no C++ objects
     // with destructors are created in that range.
@@ -66,7 +75,11 @@ bool readPng(const std::string& path, ImageRGBA8& out, std::string* error) {
     volatile bool ok = false;  // modified between setjmp and a possible longjmp
     if (setjmp(state.jump) == 0) {
         png_set_user_limits(png, 16384, 16384);
-        png_init_io(png, file.get());
+        if (file) {
+            png_init_io(png, file);
+        } else {
+            png_set_read_fn(png, memory, pngReadMemory);
+        }
         png_set_sig_bytes(png, 8);
         png_read_info(png, info);
         png_uint_32 w = png_get_image_width(png, info), h = png_get_image_height(png, info);
@@ -95,7 +108,41 @@ bool readPng(const std::string& path, ImageRGBA8& out, std::string* error) {
     delete rows;
     if (ok) out = std::move(*img);
     delete img;
-    if (!ok) return fail(state.message.empty() ? "corrupt PNG" : "corrupt PNG (" + state.message + ")");
+    if (!ok) message = state.message;
+    return ok;
+}
+}  // namespace
+
+bool readPng(const std::string& path, ImageRGBA8& out, std::string* error) {
+    auto fail = [&](const std::string& why) {
+        if (error) *error = path + ": " + why;
+        return false;
+    };
+    std::unique_ptr<FILE, int (*)(FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
+    if (!file) return fail("cannot open file");
+    png_byte header[8];
+    if (std::fread(header, 1, 8, file.get()) != 8 || png_sig_cmp(header, 0, 8) != 0)
+        return fail("not a PNG file");
+    std::string message;
+    if (!decodePng(file.get(), nullptr, out, message))
+        return fail(message.empty() ? "corrupt PNG" : "corrupt PNG (" + message + ")");
+    return true;
+}
+
+bool readPngMemory(const uint8_t* data, size_t size, const std::string& name, ImageRGBA8& out,
+                   std::string* error) {
+    auto fail = [&](const std::string& why) {
+        if (error) {
+            *error = name;
+            error->append(": ").append(why);
+        }
+        return false;
+    };
+    if (!data || size < 8 || png_sig_cmp(data, 0, 8) != 0) return fail("not a PNG file");
+    PngMemorySource source{data, size, 8};
+    std::string message;
+    if (!decodePng(nullptr, &source, out, message))
+        return fail(message.empty() ? "corrupt PNG" : "corrupt PNG (" + message + ")");
     return true;
 }
 

@@ -26,4 +26,9 @@ inline constexpr uint64_t kMaxPngPixels = 16384ull * 16384ull;
 // `error` (naming the file and the reason) on a missing, truncated, corrupt or oversized file.
 bool readPng(const std::string& path, ImageRGBA8& out, std::string* error = nullptr);
 
+// The same from memory (e.g. an image embedded in a glTF file); `name` starts the error message.
+// Data ending before the image does is reported as truncated.
+bool readPngMemory(const uint8_t* data, size_t size, const std::string& name, ImageRGBA8& out,
+                   std::string* error = nullptr);
+
 }  // namespace penumbra

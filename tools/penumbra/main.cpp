@@ -1,5 +1,6 @@
 // penumbra — command-line front end.
 //   penumbra info [--backend vulkan|gl]      device, driver and limits
+//   penumbra render <scene> -o out.png [...] a scene through the embedding API (cmd_render.cpp)
 //   penumbra demo -o out.png [--backend] [--width --height]   the RHI demo frame + timing table
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
@@ -13,6 +14,7 @@
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "cmd_render.h"
 #include "cmd_sdf.h"
 #include "engine/core/log.h"
 #include "engine/image/image.h"
@@ -158,6 +160,9 @@ int main(int argc, char** argv) {
         ->capture_default_str();
     demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
 
+    penumbra::cli::RenderOptions renderOpt;
+    auto* render = penumbra::cli::addRenderCommand(app, renderOpt);
+
     penumbra::cli::BakeOptions bakeOpt;
     auto* bake = penumbra::cli::addBakeCommand(app, bakeOpt);
     penumbra::cli::SdfInfoOptions sdfInfoOpt;
@@ -175,6 +180,7 @@ int main(int argc, char** argv) {
     penumbra::log::setMinSeverity(verbose ? penumbra::log::Severity::Debug
                                           : penumbra::log::Severity::Warning);
     if (info->parsed()) return runInfo(infoOpt);
+    if (render->parsed()) return penumbra::cli::runRender(renderOpt);
     if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
     if (bake->parsed()) {
         std::string commandLine;

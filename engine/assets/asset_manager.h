@@ -1,0 +1,135 @@
+// The asset manager: owns every mesh, material and texture a scene uses, hands out stable ids,
+// counts references and keeps a content-hash cache of processed meshes on disk.
+//
+// Stable ids: an id is a 64-bit hash of (kind, key) and never 0. File assets are keyed by the hash
+// of their bytes, so the same file content gets the same id in every run, on every machine and
+// under any path; in-memory assets (glTF primitives, procedural meshes, materials) are keyed by a
+// caller-chosen string that names what they are (e.g. "gltf:<content hash>#mesh3/prim0",
+// "primitive:sphere:r=0.5:s=32"). Adding a key that already exists returns the existing asset
+// (its reference count goes up; the new data is dropped).
+//
+// Reference counting: every load/add returns one reference owned by the caller; retain() adds
+// one, release() drops one and frees the asset when the count reaches zero. Ids of freed assets
+// stay valid numbers: loading the same content again returns the same id.
+//
+// Cache: with a cache directory, loadMesh() stores the processed mesh (parsed, validated, normals
+// generated when the file has none) as <cacheDir>/meshes/<content hash>.pmesh and later loads of
+// the same bytes read that file instead of parsing. A cache file is never trusted: its header,
+// sizes and checksum are verified and anything wrong is reported (warning), deleted and rebuilt.
+// Not thread-safe.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+#include <string_view>
+#include <unordered_map>
+#include <vector>
+
+#include "engine/assets/mesh.h"
+#include "engine/assets/texture.h"
+#include "engine/ecs/components.h"
+
+namespace penumbra::assets {
+
+using AssetId = ecs::AssetId;
+
+enum class AssetKind : uint8_t { Mesh, Material, Texture, Count };
+const char* assetKindName(AssetKind kind);
+
+struct AssetManagerDesc {
+    std::string cacheDir;  // empty: no disk cache
+    MeshLoadLimits meshLimits;
+    TextureLoadLimits textureLimits;
+};
+
+struct AssetInfo {
+    AssetId id = 0;
+    AssetKind kind = AssetKind::Mesh;
+    std::string key;
+    std::string sourcePath;  // file it came from, if any
+    uint32_t refCount = 0;
+    uint64_t bytes = 0;  // CPU memory held
+};
+
+struct AssetCacheStats {
+    uint64_t hits = 0;      // processed meshes read from the cache
+    uint64_t misses = 0;    // parsed because no cache file existed
+    uint64_t writes = 0;    // cache files written
+    uint64_t rejected = 0;  // cache files found corrupt or stale, deleted and rebuilt
+};
+
+// Importer for extra mesh file types (e.g. from a plugin): same contract as loadMesh().
+using MeshFileImporter = std::function<bool(const std::string& path, MeshData& out, std::string& error)>;
+
+class AssetManager {
+public:
+    explicit AssetManager(AssetManagerDesc desc = {});
+    ~AssetManager();
+    AssetManager(const AssetManager&) = delete;
+    AssetManager& operator=(const AssetManager&) = delete;
+
+    // ---- loading (each returns one reference; 0 and `error` on failure, nothing kept) ---------
+    // A render-ready mesh from .ply/.obj/.gltf/.glb (or a registered importer's extension):
+    // validated by the loaders, smooth area-weighted normals generated when the file has none.
+    AssetId loadMesh(const std::string& path, std::string& error);
+    // A PNG or JPEG texture as RGBA8 (see texture.h); `srgb` marks colour data.
+    AssetId loadTexture(const std::string& path, bool srgb, std::string& error);
+
+    // ---- in-memory assets ------------------------------------------------------------------
+    // Meshes are validated (indices in range, multiple of 3, finite positions, attribute counts);
+    // 0 with `error` if invalid. Normals are generated when empty.
+    AssetId addMesh(std::string_view key, MeshData mesh, std::string& error);
+    AssetId addMaterial(std::string_view key, const ecs::Material& material);
+    AssetId addTexture(std::string_view key, TextureData texture, std::string& error);
+
+    // ---- references ----------------------------------------------------------------------
+    bool retain(AssetId id);              // false for an unknown id
+    bool release(AssetId id);             // false for an unknown id; frees the asset at zero
+    uint32_t refCount(AssetId id) const;  // 0 for unknown / freed ids
+
+    // ---- access (null when unknown, freed, or of another kind) --------------------------------
+    const MeshData* mesh(AssetId id) const;
+    const ecs::Material* material(AssetId id) const;
+    const TextureData* texture(AssetId id) const;
+    bool contains(AssetId id) const;
+    const AssetInfo* info(AssetId id) const;
+
+    size_t count() const;
+    size_t count(AssetKind kind) const;
+    uint64_t memoryBytes(AssetKind kind) const;
+    std::vector<AssetInfo> list() const;  // sorted by id
+
+    void setMeshImporter(std::string_view extension, MeshFileImporter importer);
+
+    const AssetCacheStats& cacheStats() const { return m_cacheStats; }
+    const std::string& cacheDir() const { return m_desc.cacheDir; }
+
+    // 128-bit content hash of a byte range as 32 lower-case hex digits (two independent 64-bit
+    // hashes; used for cache file names and file-asset keys).
+    static std::string contentHash(const void* data, size_t size);
+    // The id for (kind, key): FNV-1a 64 of "<kind>:<key>", never 0.
+    static AssetId stableId(AssetKind kind, std::string_view key);
+
+private:
+    struct Entry;
+    AssetId insert(AssetKind kind, std::string_view key, std::string sourcePath, std::shared_ptr<void> data,
+                   uint64_t bytes);
+    Entry* find(AssetId id);
+    const Entry* find(AssetId id) const;
+
+    AssetManagerDesc m_desc;
+    std::unordered_map<AssetId, std::unique_ptr<Entry>> m_entries;
+    std::unordered_map<std::string, MeshFileImporter> m_importers;
+    AssetCacheStats m_cacheStats;
+};
+
+// Fills `mesh.normals` with smooth, area-weighted vertex normals when it is empty (unit length;
+// vertices touched only by degenerate triangles get +Y).
+void generateNormals(MeshData& mesh);
+
+// Checks a mesh as addMesh() does; false with a message naming `what` and the reason.
+bool validateMesh(const MeshData& mesh, std::string_view what, std::string& error);
+
+}  // namespace penumbra::assets

@@ -1,0 +1,175 @@
+// Scene names, the spin system, camera lookup, loading by extension (JSON scenes are read in
+// scene_json.cpp) and glTF files as scenes with a default camera and light when they have none.
+#include "engine/scene/scene.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include <fmt/format.h>
+#include <glm/geometric.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "engine/assets/mesh_internal.h"
+#include "engine/core/log.h"
+
+namespace penumbra::scene {
+
+const char* shadingModelName(ShadingModel m) {
+    switch (m) {
+        case ShadingModel::CookTorrance:
+            return "cook-torrance";
+        case ShadingModel::BlinnPhong:
+            return "blinn-phong";
+    }
+    return "unknown";
+}
+
+const char* toneMapperName(ToneMapper t) {
+    switch (t) {
+        case ToneMapper::Clamp:
+            return "clamp";
+        case ToneMapper::Reinhard:
+            return "reinhard";
+        case ToneMapper::Aces:
+            return "aces";
+    }
+    return "unknown";
+}
+
+bool parseShadingModel(std::string_view s, ShadingModel& out) {
+    for (ShadingModel m : {ShadingModel::CookTorrance, ShadingModel::BlinnPhong}) {
+        if (s == shadingModelName(m)) {
+            out = m;
+            return true;
+        }
+    }
+    return false;
+}
+
+bool parseToneMapper(std::string_view s, ToneMapper& out) {
+    for (ToneMapper t : {ToneMapper::Clamp, ToneMapper::Reinhard, ToneMapper::Aces}) {
+        if (s == toneMapperName(t)) {
+            out = t;
+            return true;
+        }
+    }
+    return false;
+}
+
+void spinSystem(ecs::World& world, double dt) {
+    world.view<ecs::Transform, const Spin>().each([dt](ecs::Transform& t, const Spin& s) {
+        const float angle = float(double(s.radiansPerSecond) * dt);
+        t.rotation = glm::normalize(glm::angleAxis(angle, s.axis) * t.rotation);
+    });
+}
+
+ecs::Entity findCamera(const ecs::World& world, std::string_view name) {
+    ecs::Entity best = ecs::kNullEntity;
+    for (auto [e, cam] : world.view<ecs::Camera>()) {
+        if (!name.empty()) {
+            const ecs::Name* n = world.get<ecs::Name>(e);
+            if (cam.name != name && !(n && n->value == name)) continue;
+        }
+        if (best.isNull() || e.index < best.index) best = e;
+    }
+    return best;
+}
+
+void unloadScene(Scene& scene, assets::AssetManager& assets) {
+    for (assets::AssetId id : scene.assetRefs) {
+        if (!assets.release(id)) {
+            log::warn("scene {}: asset {:016x} was already released", scene.sourcePath, id);
+        }
+    }
+    scene.assetRefs.clear();
+    scene.world.clear();  // refused (and logged) only when called during a view iteration
+    scene.settings = RenderSettings{};
+    scene.sourcePath.clear();
+}
+
+namespace {
+
+// A glTF scene without a camera or light gets a camera framing the world-space bounds of every
+// mesh vertex and a directional light from above (docs/FORMATS.md, "glTF files as scenes").
+void addGltfDefaults(Scene& scene, const assets::AssetManager& assets) {
+    ecs::World& world = scene.world;
+    ecs::updateTransforms(world);
+    const bool needCamera = world.count<ecs::Camera>() == 0;
+    const bool needLight = world.count<ecs::Light>() == 0;
+    if (needCamera) {
+        glm::vec3 lo(std::numeric_limits<float>::max());
+        glm::vec3 hi(-std::numeric_limits<float>::max());
+        for (auto [e, t, mr] : std::as_const(world).view<ecs::Transform, ecs::MeshRenderer>()) {
+            const assets::MeshData* mesh = assets.mesh(mr.mesh);
+            if (!mesh) continue;
+            for (const glm::vec3& p : mesh->positions) {
+                const glm::vec3 w(t.worldMatrix * glm::vec4(p, 1.0f));
+                lo = glm::min(lo, w);
+                hi = glm::max(hi, w);
+            }
+        }
+        glm::vec3 centre(0.0f);
+        float radius = 1.0f;
+        if (lo.x <= hi.x) {
+            centre = 0.5f * (lo + hi);
+            radius = 0.5f * glm::length(hi - lo);
+            if (!(radius > 0.0f) || !std::isfinite(radius)) radius = 1.0f;
+        }
+        ecs::Camera cam;
+        cam.name = "default camera";
+        // The bounding sphere fits the vertical field of view with 10% margin.
+        const float distance = 1.1f * radius / std::sin(0.5f * cam.fovY);
+        cam.nearPlane = 0.5f * (distance - radius);
+        cam.farPlane = 2.0f * (distance + radius);
+        const glm::vec3 direction = glm::normalize(glm::vec3(0.0f, 0.35f, 1.0f));
+        ecs::Transform t;
+        t.position = centre + direction * distance;
+        t.rotation = glm::quatLookAtRH(-direction, glm::vec3(0.0f, 1.0f, 0.0f));
+        const ecs::Entity e = world.create();
+        world.add<ecs::Transform>(e, t);
+        world.add<ecs::Name>(e, std::string("default camera"));
+        world.add<ecs::Camera>(e, cam);
+    }
+    if (needLight) {
+        ecs::Light light;
+        light.type = ecs::LightType::Directional;
+        light.intensity = 3.0f;
+        ecs::Transform t;
+        t.rotation =
+            glm::quatLookAtRH(glm::normalize(glm::vec3(-0.3f, -1.0f, -0.5f)), glm::vec3(0.0f, 1.0f, 0.0f));
+        const ecs::Entity e = world.create();
+        world.add<ecs::Transform>(e, t);
+        world.add<ecs::Name>(e, std::string("default light"));
+        world.add<ecs::Light>(e, light);
+    }
+    ecs::updateTransforms(world);
+}
+
+bool loadGltfAsScene(const std::string& path, assets::AssetManager& assets, Scene& out, std::string& error,
+                     const SceneLoadLimits& limits) {
+    Scene local;
+    local.sourcePath = path;
+    if (!assets::loadGltfScene(path, local.world, assets, local.assetRefs, error, nullptr, ecs::kNullEntity,
+                               limits.gltf)) {
+        for (assets::AssetId id : local.assetRefs) assets.release(id);  // loadGltfScene leaves none
+        return false;
+    }
+    addGltfDefaults(local, assets);
+    out = std::move(local);
+    return true;
+}
+
+}  // namespace
+
+bool loadScene(const std::string& path, assets::AssetManager& assets, Scene& out, std::string& error,
+               const SceneLoadLimits& limits) {
+    const std::string ext = assets::detail::lowerExtension(path);
+    if (ext == "json") return loadJsonScene(path, assets, out, error, limits);
+    if (ext == "gltf" || ext == "glb") return loadGltfAsScene(path, assets, out, error, limits);
+    error = fmt::format("{}: unknown scene file type '{}' (expected .json, .gltf or .glb)", path,
+                        ext.empty() ? std::string("no extension") : std::string(".").append(ext));
+    return false;
+}
+
+}  // namespace penumbra::scene

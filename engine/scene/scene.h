@@ -1,0 +1,93 @@
+// Scenes: a World plus the render settings and asset references that came with it. Loaded from the
+// JSON scene format (docs/FORMATS.md, "Scene JSON") or directly from a glTF file.
+//
+//   assets::AssetManager assets;
+//   scene::Scene scene;
+//   std::string error;
+//   if (!scene::loadScene("scenes/default.json", assets, scene, error)) { report(error); }
+//   ...
+//   scene::unloadScene(scene, assets);  // releases the scene's asset references
+//
+// Loading is atomic: on failure the output Scene and the asset manager are unchanged (every asset
+// reference taken during the attempt is released) and `error` holds one message naming the file,
+// the element (a JSON pointer such as "/entities/3/light/type") and the reason.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "engine/assets/asset_manager.h"
+#include "engine/assets/gltf_scene.h"
+#include "engine/ecs/world.h"
+
+namespace penumbra::scene {
+
+enum class ShadingModel : uint8_t { CookTorrance, BlinnPhong };
+enum class ToneMapper : uint8_t { Clamp, Reinhard, Aces };
+
+const char* shadingModelName(ShadingModel m);  // "cook-torrance", "blinn-phong"
+const char* toneMapperName(ToneMapper t);      // "clamp", "reinhard", "aces"
+bool parseShadingModel(std::string_view s, ShadingModel& out);
+bool parseToneMapper(std::string_view s, ToneMapper& out);
+
+// The "render" object of a scene file.
+struct RenderSettings {
+    uint32_t width = 640;
+    uint32_t height = 360;
+    ShadingModel shading = ShadingModel::CookTorrance;
+    ToneMapper toneMapper = ToneMapper::Aces;
+    float exposure = 1.0f;        // multiplies linear radiance before tone mapping
+    glm::vec3 ambient{0.03f};     // constant ambient radiance (linear RGB)
+    glm::vec3 background{0.0f};   // linear RGB where nothing is hit
+    std::string camera;           // camera entity name; empty = the first camera
+    double fixedDt = 1.0 / 60.0;  // update step of the app loop (seconds)
+};
+
+// Spins an entity about a local axis (scene animation for the app loop and velocity tests).
+struct Spin {
+    glm::vec3 axis{0.0f, 1.0f, 0.0f};  // unit
+    float radiansPerSecond = 0.0f;
+};
+// Advances every Spin by dt (rotation = angleAxis(rate * dt, axis) * rotation).
+void spinSystem(ecs::World& world, double dt);
+
+struct Scene {
+    ecs::World world;
+    RenderSettings settings;
+    std::string sourcePath;
+    std::vector<assets::AssetId> assetRefs;  // references this scene holds (one per use)
+};
+
+struct SceneLoadLimits {
+    uint64_t maxFileBytes = 64ull << 20;  // scene JSON file size cap
+    int maxJsonDepth = 64;
+    size_t maxEntities = 1u << 20;
+    size_t maxMaterials = 1u << 16;
+    assets::GltfSceneLimits gltf;
+};
+
+// By extension: .json -> JSON scene, .gltf / .glb -> glTF scene (default render settings).
+bool loadScene(const std::string& path, assets::AssetManager& assets, Scene& out, std::string& error,
+               const SceneLoadLimits& limits = {});
+bool loadJsonScene(const std::string& path, assets::AssetManager& assets, Scene& out, std::string& error,
+                   const SceneLoadLimits& limits = {});
+// Parses scene JSON text; relative asset paths resolve against `baseDir`; messages name `name`.
+bool parseJsonScene(std::string_view text, const std::string& name, const std::string& baseDir,
+                    assets::AssetManager& assets, Scene& out, std::string& error,
+                    const SceneLoadLimits& limits = {});
+
+// Releases every asset reference of the scene and clears it.
+void unloadScene(Scene& scene, assets::AssetManager& assets);
+
+// The camera named `name` (Camera::name or the entity's Name), or the first camera in entity order
+// when `name` is empty. Null entity when there is none.
+ecs::Entity findCamera(const ecs::World& world, std::string_view name);
+
+// The current scene-format version written in "version" (docs/FORMATS.md).
+inline constexpr int kSceneFormatVersion = 1;
+
+}  // namespace penumbra::scene

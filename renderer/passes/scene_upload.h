@@ -1,0 +1,79 @@
+// Pass "scene_upload" (Transfer): writes this frame's scene data (camera/frame constants,
+// materials, lights, per-object matrices) into frame-graph buffers with command-list updates, and
+// the GPU asset cache that keeps one copy of every mesh (interleaved vertex buffer + index buffer)
+// and every material texture across frames, uploaded the first time a frame needs it.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <unordered_map>
+
+#include "engine/assets/asset_manager.h"
+#include "renderer/frame_graph/frame_graph.h"
+#include "renderer/passes/gpu_scene.h"
+#include "rhi/device.h"
+
+namespace penumbra::render {
+
+struct GpuMesh {
+    rhi::BufferHandle vertices;  // GpuVertex[vertexCount]
+    rhi::BufferHandle indices;   // uint32_t[indexCount]
+    uint32_t vertexCount = 0;
+    uint32_t indexCount = 0;
+    uint64_t bytes = 0;                        // both buffers' sizes
+    const assets::MeshData* source = nullptr;  // the asset it was made from (detects replacement)
+};
+
+struct GpuTexture {
+    rhi::TextureHandle texture;  // RGBA8_SRGB for colour data, RGBA8_UNORM otherwise; one mip
+    uint64_t bytes = 0;
+    const assets::TextureData* source = nullptr;
+};
+
+// One GPU copy per mesh / texture asset id, kept across frames until collect() finds the asset
+// gone (or the id now names different data, which is re-uploaded on its next use).
+class GpuAssetCache {
+public:
+    explicit GpuAssetCache(rhi::Device& device) : m_device(device) {}
+    ~GpuAssetCache();
+    GpuAssetCache(const GpuAssetCache&) = delete;
+    GpuAssetCache& operator=(const GpuAssetCache&) = delete;
+
+    // The GPU copy of mesh `id`, uploading `data` on first use. Null with `error` when the mesh
+    // has no triangles, is inconsistent, or a buffer cannot be created.
+    const GpuMesh* mesh(assets::AssetId id, const assets::MeshData& data, std::string& error);
+    // The GPU copy of texture `id`; null with `error` on bad data or a creation failure.
+    const GpuTexture* texture(assets::AssetId id, const assets::TextureData& data, std::string& error);
+    // A 1x1 white RGBA8_UNORM texture (bound for untextured materials when albedo is written).
+    rhi::TextureHandle whiteTexture(std::string& error);
+
+    // Drops every copy whose asset is no longer alive in `assets`.
+    void collect(const assets::AssetManager& assets);
+
+    uint64_t meshBytes() const;
+    uint64_t textureBytes() const;  // material textures + the white texture
+    size_t meshCount() const { return m_meshes.size(); }
+    size_t textureCount() const { return m_textures.size(); }
+
+private:
+    void release(GpuMesh& m);
+
+    rhi::Device& m_device;
+    std::unordered_map<assets::AssetId, GpuMesh> m_meshes;
+    std::unordered_map<assets::AssetId, GpuTexture> m_textures;
+    rhi::TextureHandle m_white;
+};
+
+// This frame's scene buffers (frame-graph transients written by scene_upload).
+struct SceneBuffers {
+    fg::BufferRef frame;      // GpuFrame, uniform
+    fg::BufferRef materials;  // GpuMaterial[], storage
+    fg::BufferRef lights;     // GpuLight[] (>= 1 element), storage
+    fg::BufferRef objects;    // GpuObject[], storage
+    uint64_t bytes = 0;       // sum of their sizes
+};
+
+// Adds the "scene_upload" pass. `data` must stay alive and unchanged until the graph has executed.
+SceneBuffers addSceneUploadPass(fg::FrameGraph& graph, const SceneFrameData& data);
+
+}  // namespace penumbra::render

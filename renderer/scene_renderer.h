@@ -1,0 +1,103 @@
+// The scene renderer: draws an ECS World through the frame graph, written once against the RHI.
+// This issue's passes (renderer/passes/), in frame order:
+//   scene_upload   (transfer)  per-frame camera, lights and materials; mesh vertex/index buffers
+//                              and material textures are uploaded once per asset and kept
+//   gbuffer_mesh   (raster)    MeshRenderer entities into the deferred G-buffer
+//   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
+//                              directional + point lights, ambient) + exposure + tone mapping,
+//                              written sRGB-encoded into the RGBA8 output
+// A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass).
+//
+// G-buffer (mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
+//   gbuffer.depth     R32_FLOAT    linear view depth in scene units (0 = nothing hit)
+//   gbuffer.normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
+//   gbuffer.material  RGBA8_UNORM  r = material index / 255 (index < 255), g = SSS thickness,
+//                                  b = shadow factor, a = ambient occlusion (1 = unoccluded)
+// plus, outside the 96 bits (as in mTec: "other buffers"):
+//   gbuffer.velocity  RG16_FLOAT   screen-space motion to the previous frame, in pixels
+//   gbuffer.albedo    RGBA8_SRGB   base colour x texture; only when a material has a base-colour
+//                                  texture (otherwise lighting reads the material's factor)
+//   depth             D32_FLOAT    hardware depth for the raster passes
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/assets/asset_manager.h"
+#include "engine/ecs/world.h"
+#include "engine/image/image.h"
+#include "engine/scene/scene.h"
+#include "renderer/frame_graph/frame_graph.h"
+#include "rhi/device.h"
+
+namespace penumbra::render {
+
+// Device memory the renderer holds, by resource class (bytes).
+struct MemoryReport {
+    uint64_t meshBuffers = 0;    // vertex + index buffers of uploaded meshes
+    uint64_t sceneBuffers = 0;   // camera / light / material / per-object buffers
+    uint64_t textures = 0;       // material textures
+    uint64_t renderTargets = 0;  // G-buffer, depth, output (frame graph transients included)
+    uint64_t total() const { return meshBuffers + sceneBuffers + textures + renderTargets; }
+};
+
+struct FrameStats {
+    std::vector<fg::PassTiming> passes;  // executed passes in order
+    MemoryReport memory;
+    uint32_t drawCalls = 0;
+    uint64_t triangles = 0;
+    uint32_t lights = 0;
+    uint32_t materials = 0;
+};
+
+struct FrameDesc {
+    uint32_t width = 0;
+    uint32_t height = 0;
+    ecs::Entity camera = ecs::kNullEntity;  // must have Camera + Transform
+    scene::RenderSettings settings;
+    // Optional external colour target (RGBA8_UNORM, e.g. a window backbuffer) and the access state
+    // it is in; the output is written there instead of the renderer's own texture and left in
+    // `targetFinalAccess`.
+    rhi::TextureHandle target;
+    rhi::Access targetAccess = rhi::Access::None;
+    rhi::Access targetFinalAccess = rhi::Access::ShaderSampled;
+};
+
+class SceneRenderer {
+public:
+    explicit SceneRenderer(rhi::Device& device);
+    ~SceneRenderer();
+    SceneRenderer(const SceneRenderer&) = delete;
+    SceneRenderer& operator=(const SceneRenderer&) = delete;
+
+    // Renders one frame of `world` (transforms must be up to date: ecs::updateTransforms) and
+    // submits it. False with `error` (e.g. no camera, a mesh asset missing, more than 255
+    // materials, a device failure); the renderer stays usable.
+    bool render(const ecs::World& world, const assets::AssetManager& assets, const FrameDesc& desc,
+                std::string& error);
+
+    // Reads back the last frame's output (own texture only) as 8-bit sRGB RGBA, row 0 = top.
+    bool readPixels(ImageRGBA8& out, std::string& error);
+    // Reads back a G-buffer target of the last frame by name ("gbuffer.depth", ...) as raw texels
+    // (tests); false when the target was not part of the frame.
+    bool readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
+                    std::string& error);
+
+    const FrameStats& lastFrameStats() const;
+    std::string lastFrameGraphviz() const;
+
+    // Drops every cached GPU copy of assets no longer alive in `assets` (call after unloading).
+    void collectAssets(const assets::AssetManager& assets);
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> m_impl;
+};
+
+// Octahedral normal encoding as the shaders do it (exposed for tests): unit vector <-> [-1,1]^2.
+glm::vec2 octEncode(glm::vec3 n);
+glm::vec3 octDecode(glm::vec2 e);
+
+}  // namespace penumbra::render

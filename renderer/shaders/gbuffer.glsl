@@ -1,0 +1,28 @@
+// G-buffer encoding shared by every pass that writes or reads it (renderer/scene_renderer.h):
+//   depth     R32_FLOAT    linear view depth (0 = nothing hit)
+//   normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
+//   material  RGBA8_UNORM  r = material index / 255, g = SSS thickness, b = shadow, a = AO
+//   velocity  RG16_FLOAT   pixels moved since the previous frame (current - previous)
+// The C++ octEncode / octDecode (renderer/passes/gbuffer_mesh.cpp) are the same functions.
+
+vec2 octSignNotZero(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
+
+// Unit vector -> [-1, 1]^2: project onto the octahedron |x|+|y|+|z| = 1, fold the lower half.
+vec2 octEncode(vec3 n) {
+    vec2 p = n.xy / (abs(n.x) + abs(n.y) + abs(n.z));
+    return n.z >= 0.0 ? p : (1.0 - abs(p.yx)) * octSignNotZero(p);
+}
+
+vec3 octDecode(vec2 e) {
+    vec3 n = vec3(e, 1.0 - abs(e.x) - abs(e.y));
+    float t = max(-n.z, 0.0);
+    n.x += n.x >= 0.0 ? -t : t;
+    n.y += n.y >= 0.0 ? -t : t;
+    return normalize(n);
+}
+
+vec4 packMaterial(uint index, float thickness, float shadow, float ao) {
+    return vec4(float(index) / 255.0, thickness, shadow, ao);
+}
+
+uint unpackMaterialIndex(vec4 m) { return uint(m.r * 255.0 + 0.5); }

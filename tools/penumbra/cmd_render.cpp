@@ -1,0 +1,244 @@
+#include "cmd_render.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <vector>
+
+#include <fmt/format.h>
+#include <nlohmann/json.hpp>
+
+#include "engine/core/log.h"
+#include "engine/ecs/components.h"
+#include "engine/engine.h"
+#include "engine/image/image.h"
+#include "renderer/renderer.h"
+
+namespace penumbra::cli {
+namespace {
+
+std::string defaultCacheDir() {
+    if (const char* env = std::getenv("PENUMBRA_CACHE_DIR"); env && *env) return env;
+    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/penumbra";
+    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/penumbra";
+    return {};
+}
+
+double median(std::vector<double> v) {
+    v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
+    if (v.empty()) return std::nan("");
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct PassSeries {
+    std::string name;
+    std::vector<double> gpu, cpu;
+};
+
+nlohmann::json jsonNumber(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
+
+}  // namespace
+
+CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
+    auto* cmd = app.add_subcommand(
+        "render",
+        "Render a scene (.json scene file, .gltf or .glb) to a PNG and print per-pass GPU/CPU times");
+    cmd->add_option("scene", opt.scene, "Scene file: .json (docs/FORMATS.md), .gltf or .glb")->required();
+    cmd->add_option("-o,--output", opt.output, "Output PNG path")->capture_default_str();
+    cmd->add_option("--backend", opt.backend,
+                    "Graphics backend: vulkan | gl (default: $PENUMBRA_BACKEND, else auto)")
+        ->check(CLI::IsMember({"vulkan", "vk", "gl", "opengl", "auto"}, CLI::ignore_case));
+    cmd->add_flag(
+        "--validation", opt.validation,
+        "Enable RHI validation and the Vulkan validation layer / GL debug output (errors fail the run)");
+    cmd->add_option("--width", opt.width, "Image width in pixels (default: the scene's render.width)")
+        ->check(CLI::Range(1u, 8192u));
+    cmd->add_option("--height", opt.height, "Image height in pixels (default: the scene's render.height)")
+        ->check(CLI::Range(1u, 8192u));
+    cmd->add_option("--frames", opt.frames, "Number of frames to run; the last one is written")
+        ->check(CLI::Range(1u, 100000u))
+        ->capture_default_str();
+    cmd->add_option("--fixed-dt", opt.fixedDt,
+                    "Simulated seconds per frame (deterministic time: frame k is rendered at k * dt)")
+        ->check(CLI::Range(0.0, 10.0))
+        ->capture_default_str();
+    cmd->add_option("--camera", opt.camera,
+                    "Camera name (default: the scene's render.camera, else the first)");
+    cmd->add_option(
+        "--stats", opt.stats,
+        "Write JSON statistics: per-pass GPU/CPU ms, memory per resource class, entity/asset counts");
+    cmd->add_option("--graphviz", opt.graphviz, "Also write the last frame's frame graph as Graphviz dot");
+    cmd->add_option("--cache-dir", opt.cacheDir,
+                    "Processed-asset cache folder (default: $PENUMBRA_CACHE_DIR, $XDG_CACHE_HOME/penumbra or "
+                    "~/.cache/penumbra)");
+    cmd->add_flag("--no-cache", opt.noCache, "Do not read or write the processed-asset cache");
+    cmd->add_option("--plugin-dir", opt.pluginDir, "Load shared-library plugins (*.so) from this folder");
+    cmd->add_option("--shading", opt.shading, "Override the scene's shading model")
+        ->check(CLI::IsMember({"cook-torrance", "blinn-phong"}));
+    cmd->add_option("--tone-mapper", opt.toneMapper, "Override the scene's tone mapper")
+        ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
+    return cmd;
+}
+
+int runRender(const RenderOptions& opt) {
+    EngineDesc engineDesc;
+    engineDesc.cacheDir =
+        opt.noCache ? std::string() : (opt.cacheDir.empty() ? defaultCacheDir() : opt.cacheDir);
+    engineDesc.pluginDir = opt.pluginDir;
+    std::string error;
+    std::unique_ptr<Engine> engine = Engine::create(engineDesc, error);
+    if (!engine) {
+        log::error("{}", error);
+        return 1;
+    }
+    if (!engine->loadScene(opt.scene, error)) {
+        log::error("{}", error);
+        return 1;
+    }
+    scene::RenderSettings& settings = engine->settings();
+    if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
+    if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
+    if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
+        log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
+        return 1;
+    }
+
+    RendererDesc rendererDesc;
+    rendererDesc.validation = opt.validation;
+    rendererDesc.width = opt.width;
+    rendererDesc.height = opt.height;
+    if (!opt.backend.empty() && !rhi::parseBackend(opt.backend, rendererDesc.backend)) {
+        log::error("unknown backend '{}'", opt.backend);
+        return 2;
+    }
+    std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
+    if (!renderer) {
+        log::error("{}", error);
+        return 1;
+    }
+    const rhi::DeviceInfo& info = renderer->device().info();
+    const uint32_t width = opt.width ? opt.width : settings.width;
+    const uint32_t height = opt.height ? opt.height : settings.height;
+    fmt::print("penumbra render: {} on {} ({}), {}x{}, {} frame(s) of {:.6g} s\n",
+               rhi::toString(info.backend), info.deviceName, info.platform, width, height, opt.frames,
+               opt.fixedDt);
+
+    std::vector<PassSeries> series;
+    app::FrameTime lastTime;
+    for (uint32_t frame = 0; frame < opt.frames; ++frame) {
+        // Frame 0 shows the scene at t = 0; every later frame advances by exactly --fixed-dt.
+        lastTime = engine->update(frame == 0 ? 0.0 : opt.fixedDt);
+        if (!renderer->renderFrame(*engine, error, opt.camera)) {
+            log::error("{}: frame {}: {}", opt.scene, frame, error);
+            return 1;
+        }
+        for (const fg::PassTiming& t : renderer->stats().passes) {
+            auto it = std::find_if(series.begin(), series.end(),
+                                   [&](const PassSeries& s) { return s.name == t.name; });
+            if (it == series.end()) it = series.insert(series.end(), PassSeries{t.name, {}, {}});
+            it->gpu.push_back(t.gpuMs);
+            it->cpu.push_back(t.cpuMs);
+        }
+        if (opt.frames > 1 && (frame + 1) % 10 == 0)
+            fmt::print(stderr, "frame {}/{}\n", frame + 1, opt.frames);
+    }
+
+    ImageRGBA8 image;
+    if (!renderer->readPixels(image, error)) {
+        log::error("reading back the frame failed: {}", error);
+        return 1;
+    }
+    if (!writePng(opt.output, image, &error)) {
+        log::error("{}", error);
+        return 1;
+    }
+
+    // The table: medians over all frames (the first frame also uploads meshes and textures).
+    double gpuTotal = 0, cpuTotal = 0;
+    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
+    for (const PassSeries& s : series) {
+        const double g = median(s.gpu), c = median(s.cpu);
+        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", s.name, g, c);
+        if (std::isfinite(g)) gpuTotal += g;
+        if (std::isfinite(c)) cpuTotal += c;
+    }
+    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
+    if (opt.frames > 1) fmt::print("(medians over {} frames)\n", opt.frames);
+
+    const render::FrameStats& stats = renderer->stats();
+    const ecs::World& world = engine->world();
+    const assets::AssetManager& assets = engine->assets();
+    if (!opt.stats.empty()) {
+        nlohmann::json j;
+        j["scene"] = opt.scene;
+        j["backend"] = rhi::toString(info.backend);
+        j["device"] = info.deviceName;
+        j["width"] = width;
+        j["height"] = height;
+        j["frames"] = opt.frames;
+        j["fixedDt"] = opt.fixedDt;
+        j["simTime"] = lastTime.simTime;
+        j["updateSteps"] = engine->loop().stepCount();
+        nlohmann::json passes = nlohmann::json::array();
+        for (const PassSeries& s : series) {
+            passes.push_back({{"name", s.name},
+                              {"gpuMs", jsonNumber(median(s.gpu))},
+                              {"cpuMs", jsonNumber(median(s.cpu))},
+                              {"gpuMsLast", jsonNumber(s.gpu.back())},
+                              {"cpuMsLast", jsonNumber(s.cpu.back())},
+                              {"samples", s.gpu.size()}});
+        }
+        j["passes"] = passes;
+        j["memory"] = {{"meshBuffers", stats.memory.meshBuffers},
+                       {"sceneBuffers", stats.memory.sceneBuffers},
+                       {"textures", stats.memory.textures},
+                       {"renderTargets", stats.memory.renderTargets},
+                       {"total", stats.memory.total()}};
+        j["counts"] = {{"entities", world.aliveCount()},
+                       {"meshRenderers", world.count<ecs::MeshRenderer>()},
+                       {"cameras", world.count<ecs::Camera>()},
+                       {"lights", world.count<ecs::Light>()},
+                       {"assets", assets.count()},
+                       {"meshAssets", assets.count(assets::AssetKind::Mesh)},
+                       {"materialAssets", assets.count(assets::AssetKind::Material)},
+                       {"textureAssets", assets.count(assets::AssetKind::Texture)},
+                       {"drawCalls", stats.drawCalls},
+                       {"triangles", stats.triangles}};
+        j["assetCache"] = {{"dir", engineDesc.cacheDir},
+                           {"hits", assets.cacheStats().hits},
+                           {"misses", assets.cacheStats().misses},
+                           {"writes", assets.cacheStats().writes},
+                           {"rejected", assets.cacheStats().rejected}};
+        std::error_code ec;
+        const std::filesystem::path statsPath(opt.stats);
+        if (statsPath.has_parent_path()) std::filesystem::create_directories(statsPath.parent_path(), ec);
+        std::ofstream f(opt.stats);
+        f << j.dump(2) << "\n";
+        if (!f) {
+            log::error("{}: cannot write the statistics file", opt.stats);
+            return 1;
+        }
+    }
+    if (!opt.graphviz.empty()) {
+        std::ofstream dot(opt.graphviz);
+        dot << renderer->frameGraphviz();
+        if (!dot) {
+            log::error("{}: cannot write the frame-graph dump", opt.graphviz);
+            return 1;
+        }
+    }
+    fmt::print("entities {}, draw calls {}, triangles {}, GPU memory {:.2f} MiB\n", world.aliveCount(),
+               stats.drawCalls, stats.triangles, double(stats.memory.total()) / (1024.0 * 1024.0));
+    fmt::print("wrote {}\n", opt.output);
+    if (opt.validation && renderer->validationErrors() != 0) {
+        log::error("{} validation error(s) reported", renderer->validationErrors());
+        return 1;
+    }
+    return 0;
+}
+
+}  // namespace penumbra::cli
