@@ -11,6 +11,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <unordered_map>
 
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
@@ -83,7 +84,7 @@ std::string hexHash(const Hash128& h) { return fmt::format("{:016x}{:016x}", h.a
 // ---- .pmesh ----------------------------------------------------------------------------------
 
 constexpr char kPmeshMagic[8] = {'P', 'N', 'B', 'R', 'M', 'S', 'H', '\n'};
-constexpr uint32_t kPmeshVersion = 1;
+constexpr uint32_t kPmeshVersion = 2;  // 2: normals shared by vertices at one position
 constexpr size_t kPmeshHeaderBytes = 64;
 constexpr uint32_t kFlagUvs = 1u;
 
@@ -296,28 +297,88 @@ void generateNormals(MeshData& mesh) {
     if (!mesh.normals.empty()) {
         return;
     }
+    // Files without normals often split vertices along uv or patch seams (the npm teapot has 263
+    // such duplicates); normals computed per split vertex would show those seams as creases. So a
+    // vertex also takes the faces of the other vertices at exactly its position, but only those
+    // within kCreaseAngle of its own faces' normal, which keeps deliberate hard edges (a box
+    // authored with 4 vertices per face) hard. A vertex's own faces always count, creased or not.
+    constexpr double kCosCrease = 0.5;  // kCreaseAngle = 60 degrees
     const size_t n = mesh.positions.size();
-    std::vector<glm::dvec3> sum(n, glm::dvec3(0.0));
-    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) {
-        const uint32_t i0 = mesh.indices[t];
-        const uint32_t i1 = mesh.indices[t + 1];
-        const uint32_t i2 = mesh.indices[t + 2];
-        if (i0 >= n || i1 >= n || i2 >= n) {
+    const size_t triangles = mesh.indices.size() / 3;
+
+    // group[i]: the first vertex at vertex i's position (+0 and -0 are one position).
+    std::vector<uint32_t> group(n);
+    {
+        struct Bits {
+            uint32_t x, y, z;
+            bool operator==(const Bits&) const = default;
+        };
+        struct BitsHash {
+            size_t operator()(const Bits& b) const {
+                uint64_t h = 1469598103934665603ull;
+                for (uint32_t v : {b.x, b.y, b.z}) h = (h ^ v) * 1099511628211ull;
+                return size_t(h);
+            }
+        };
+        std::unordered_map<Bits, uint32_t, BitsHash> first;
+        first.reserve(n);
+        for (size_t i = 0; i < n; ++i) {
+            const glm::vec3 p = mesh.positions[i] + glm::vec3(0.0f);
+            Bits key{};
+            std::memcpy(&key, &p, sizeof key);
+            group[i] = first.emplace(key, uint32_t(i)).first->second;
+        }
+    }
+
+    // Area-weighted face normals (the cross product's length is twice the area) and, per
+    // position group, the list of faces touching it (compressed rows).
+    std::vector<glm::dvec3> face(triangles, glm::dvec3(0.0));
+    std::vector<glm::dvec3> own(n, glm::dvec3(0.0));
+    std::vector<uint32_t> rowStart(n + 1, 0);
+    for (size_t t = 0; t < triangles; ++t) {
+        const uint32_t* tri = &mesh.indices[3 * t];
+        if (tri[0] >= n || tri[1] >= n || tri[2] >= n) {
             continue;
         }
-        const glm::dvec3 p0(mesh.positions[i0]);
-        // The cross product's length is twice the triangle's area: area weighting for free.
-        const glm::dvec3 face =
-            glm::cross(glm::dvec3(mesh.positions[i1]) - p0, glm::dvec3(mesh.positions[i2]) - p0);
-        sum[i0] += face;
-        sum[i1] += face;
-        sum[i2] += face;
+        const glm::dvec3 p0(mesh.positions[tri[0]]);
+        face[t] =
+            glm::cross(glm::dvec3(mesh.positions[tri[1]]) - p0, glm::dvec3(mesh.positions[tri[2]]) - p0);
+        for (int c = 0; c < 3; ++c) {
+            own[tri[c]] += face[t];
+            ++rowStart[group[tri[c]] + 1];
+        }
     }
+    for (size_t i = 0; i < n; ++i) rowStart[i + 1] += rowStart[i];
+    std::vector<uint32_t> faces(rowStart[n]);
+    std::vector<uint32_t> fill(rowStart.begin(), rowStart.end() - 1);
+    for (size_t t = 0; t < triangles; ++t) {
+        const uint32_t* tri = &mesh.indices[3 * t];
+        if (tri[0] >= n || tri[1] >= n || tri[2] >= n) {
+            continue;
+        }
+        for (int c = 0; c < 3; ++c) faces[fill[group[tri[c]]]++] = uint32_t(t);
+    }
+
     mesh.normals.resize(n);
     for (size_t i = 0; i < n; ++i) {
-        const double len = glm::length(sum[i]);
+        glm::dvec3 sum = own[i];
+        const double ownLen = glm::length(own[i]);
+        if (ownLen > 0.0 && std::isfinite(ownLen)) {
+            const glm::dvec3 ownDir = own[i] / ownLen;
+            sum = glm::dvec3(0.0);
+            const uint32_t g = group[i];
+            for (uint32_t k = rowStart[g]; k < rowStart[g + 1]; ++k) {
+                const uint32_t t = faces[k];
+                const uint32_t* tri = &mesh.indices[3 * size_t(t)];
+                const glm::dvec3& f = face[t];
+                // A vertex's own faces always count; faces of its split copies only within the crease.
+                const bool ownFace = tri[0] == i || tri[1] == i || tri[2] == i;
+                if (ownFace || glm::dot(f, ownDir) >= kCosCrease * glm::length(f)) sum += f;
+            }
+        }
+        const double len = glm::length(sum);
         mesh.normals[i] =
-            len > 0.0 && std::isfinite(len) ? glm::vec3(sum[i] / len) : glm::vec3(0.0f, 1.0f, 0.0f);
+            len > 0.0 && std::isfinite(len) ? glm::vec3(sum / len) : glm::vec3(0.0f, 1.0f, 0.0f);
     }
 }
 

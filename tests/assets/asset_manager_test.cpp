@@ -705,3 +705,34 @@ TEST(AssetManager, LoadsTheNpmBunny) {
 
 }  // namespace
 }  // namespace penumbra::assets
+
+namespace penumbra::assets {
+namespace {
+
+// Split vertices at one position share their normal when their faces are nearly coplanar (a seam),
+// but not across a crease sharper than 60 degrees.
+TEST(AssetManager, GeneratedNormalsSmoothSplitSeamsButKeepCreases) {
+    // Two triangles meeting at the edge x = 0 with their own copies of the edge vertices; the right
+    // one is tilted by 20 degrees about z (a seam), a third copy continues at 90 degrees (a crease).
+    const float c = std::cos(0.349066f), s = std::sin(0.349066f);
+    MeshData m;
+    m.positions = {{-1, 0, 0}, {0, 0, -1}, {0, 0, 1},    // left, in y = 0, normal +Y
+                   {0, 0, -1}, {0, 0, 1},  {c, s, 0},    // right copy, tilted up by 20 degrees
+                   {0, 0, -1}, {0, 0, 1},  {0, -1, 0}};  // wall going down from the edge: crease
+    m.indices = {0, 2, 1, 3, 4, 5, 6, 8, 7};
+    generateNormals(m);
+    ASSERT_EQ(m.normals.size(), 9u);
+    // The left and right copies of the edge vertex agree (smoothed across the 20-degree seam) ...
+    EXPECT_LT(glm::length(m.normals[1] - m.normals[3]), 1e-6f);
+    EXPECT_LT(glm::length(m.normals[2] - m.normals[4]), 1e-6f);
+    // ... and lie between the two face normals, not equal to the left one.
+    EXPECT_GT(glm::length(m.normals[1] - glm::vec3(0, 1, 0)), 0.05f);
+    // The wall's copies keep the wall's own normal (90 degrees away: not blended).
+    const glm::vec3 wall =
+        glm::normalize(glm::cross(m.positions[8] - m.positions[6], m.positions[7] - m.positions[6]));
+    EXPECT_LT(glm::length(m.normals[6] - wall), 1e-6f);
+    EXPECT_LT(glm::length(m.normals[7] - wall), 1e-6f);
+}
+
+}  // namespace
+}  // namespace penumbra::assets
