@@ -22,6 +22,7 @@
 #include "engine/assets/asset_manager.h"
 #include "engine/assets/gltf_internal.h"
 #include "engine/assets/mesh_internal.h"
+#include "engine/core/json_depth.h"
 
 namespace penumbra::assets::gltf {
 namespace {
@@ -91,26 +92,10 @@ bool checkGlbContainer(const std::string& path, const detail::FileBytes& bytes, 
 }
 
 bool checkJsonDepth(const std::string& path, std::string_view json, std::string& error) {
-    int depth = 0;
-    bool inString = false;
-    for (size_t i = 0; i < json.size(); ++i) {
-        const char c = json[i];
-        if (inString) {
-            if (c == '\\') {
-                ++i;
-            } else if (c == '"') {
-                inString = false;
-            }
-        } else if (c == '"') {
-            inString = true;
-        } else if (c == '[' || c == '{') {
-            if (++depth > kMaxJsonDepth) {
-                error = fmt::format("{}: JSON nested deeper than {} levels (refused)", path, kMaxJsonDepth);
-                return false;
-            }
-        } else if (c == ']' || c == '}') {
-            --depth;
-        }
+    size_t offset = 0;
+    if (!jsonDepthWithin(json, kMaxJsonDepth, offset)) {
+        error = fmt::format("{}: JSON nested deeper than {} levels (refused)", path, kMaxJsonDepth);
+        return false;
     }
     return true;
 }

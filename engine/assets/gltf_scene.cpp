@@ -26,6 +26,7 @@
 #include "engine/assets/gltf_scene.h"
 
 #define GLM_ENABLE_EXPERIMENTAL
+#include <array>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -48,6 +49,16 @@ const char* const kSlotPath[kTextureSlots] = {"pbrMetallicRoughness.baseColorTex
                                               "pbrMetallicRoughness.metallicRoughnessTexture",
                                               "normalTexture", "occlusionTexture", "emissiveTexture"};
 const bool kSlotSrgb[kTextureSlots] = {true, false, false, false, true};
+
+// (texture index, texCoord set) of a material's slots, in kSlotPath order.
+std::array<std::pair<int, int>, kTextureSlots> textureSlots(const tinygltf::Material& m) {
+    const tinygltf::PbrMetallicRoughness& pbr = m.pbrMetallicRoughness;
+    return {{{pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord},
+             {pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord},
+             {m.normalTexture.index, m.normalTexture.texCoord},
+             {m.occlusionTexture.index, m.occlusionTexture.texCoord},
+             {m.emissiveTexture.index, m.emissiveTexture.texCoord}}};
+}
 
 struct TexturePlan {
     int image = -1;
@@ -271,12 +282,7 @@ bool SceneImporter::checkMaterials(std::string& error) {
                 return fail(error, fmt::format("{}.emissiveFactor component {} is negative", at, e));
             }
         }
-        const std::pair<int, int> infos[kTextureSlots] = {
-            {pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord},
-            {pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord},
-            {m.normalTexture.index, m.normalTexture.texCoord},
-            {m.occlusionTexture.index, m.occlusionTexture.texCoord},
-            {m.emissiveTexture.index, m.emissiveTexture.texCoord}};
+        const std::array<std::pair<int, int>, kTextureSlots> infos = textureSlots(m);
         for (int s = 0; s < kTextureSlots; ++s) {
             const auto [index, texCoord] = infos[s];
             if (index < -1 || (index >= 0 && size_t(index) >= textureCount)) {
@@ -671,12 +677,7 @@ bool SceneImporter::planMaterial(int index, std::string& error) {
     plan.material.roughness = float(pbr.roughnessFactor);
     plan.material.emissive =
         glm::vec3(float(m.emissiveFactor[0]), float(m.emissiveFactor[1]), float(m.emissiveFactor[2]));
-    const std::pair<int, int> infos[kTextureSlots] = {
-        {pbr.baseColorTexture.index, pbr.baseColorTexture.texCoord},
-        {pbr.metallicRoughnessTexture.index, pbr.metallicRoughnessTexture.texCoord},
-        {m.normalTexture.index, m.normalTexture.texCoord},
-        {m.occlusionTexture.index, m.occlusionTexture.texCoord},
-        {m.emissiveTexture.index, m.emissiveTexture.texCoord}};
+    const std::array<std::pair<int, int>, kTextureSlots> infos = textureSlots(m);
     for (int s = 0; s < kTextureSlots; ++s) {
         const auto [textureIndex, texCoord] = infos[s];
         if (textureIndex < 0) {

@@ -23,6 +23,7 @@
 
 #include "engine/assets/mesh_internal.h"
 #include "engine/assets/primitives.h"
+#include "engine/core/json_depth.h"
 #include "engine/core/log.h"
 #include "engine/scene/scene.h"
 
@@ -77,32 +78,6 @@ void lineColumn(std::string_view text, size_t offset, size_t& line, size_t& colu
             ++column;
         }
     }
-}
-
-// The nesting depth check of step 1: false with the offset of the first bracket too deep.
-bool withinDepth(std::string_view text, int maxDepth, size_t& offset) {
-    int depth = 0;
-    bool inString = false;
-    for (size_t i = 0; i < text.size(); ++i) {
-        const char c = text[i];
-        if (inString) {
-            if (c == '\\') {
-                ++i;
-            } else if (c == '"') {
-                inString = false;
-            }
-        } else if (c == '"') {
-            inString = true;
-        } else if (c == '[' || c == '{') {
-            if (++depth > maxDepth) {
-                offset = i;
-                return false;
-            }
-        } else if (c == ']' || c == '}') {
-            --depth;
-        }
-    }
-    return true;
 }
 
 // Step 2: builds the DOM from nlohmann's SAX events, tracking the JSON pointer of the value being
@@ -1102,7 +1077,7 @@ bool parseJsonScene(std::string_view text, const std::string& name, const std::s
         return false;
     }
     size_t deepAt = 0;
-    if (!withinDepth(text, limits.maxJsonDepth, deepAt)) {
+    if (!jsonDepthWithin(text, limits.maxJsonDepth, deepAt)) {
         size_t line = 0, column = 0;
         lineColumn(text, deepAt, line, column);
         error = fmt::format(
