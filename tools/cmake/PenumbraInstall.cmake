@@ -44,3 +44,9 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/penumbraConfigVersi
                                  VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/penumbraConfig.cmake ${CMAKE_CURRENT_BINARY_DIR}/penumbraConfigVersion.cmake
         DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR})
+
+# A sanitizer build installs instrumented libraries: their consumers must link the sanitizer
+# runtimes too.
+if(PENUMBRA_SANITIZE)
+  target_link_options(penumbra_engine INTERFACE $<INSTALL_INTERFACE:-fsanitize=address,undefined>)
+endif()
