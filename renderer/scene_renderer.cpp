@@ -175,16 +175,22 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
         return fail(fmt::format("camera {}: fovY {} must be in (0, pi) and 0 < near {} < far {}",
                                 entityName(desc.camera), camera->fovY, camera->nearPlane, camera->farPlane));
     const bool external = desc.target.isValid();
+    // An RGBA8_SRGB target (e.g. the GL window backbuffer) encodes in hardware; RGBA8_UNORM targets
+    // get the exact sRGB OETF in the shader.
+    bool hardwareSrgb = false;
     if (external) {
         const rhi::TextureDesc* td = s.device.describe(desc.target);
         if (!td) return fail("FrameDesc::target is not a live texture");
-        if (td->format != rhi::Format::RGBA8_UNORM || td->width != desc.width || td->height != desc.height ||
+        if ((td->format != rhi::Format::RGBA8_UNORM && td->format != rhi::Format::RGBA8_SRGB) ||
+            td->width != desc.width || td->height != desc.height ||
             !any(td->usage & rhi::TextureUsage::ColorTarget))
             return fail(
-                fmt::format("FrameDesc::target '{}' must be an RGBA8_UNORM colour target of {}x{} (it is {} "
+                fmt::format("FrameDesc::target '{}' must be an RGBA8_UNORM or RGBA8_SRGB colour target of "
+                            "{}x{} (it is {} "
                             "{}x{})",
                             td->debugName, desc.width, desc.height, rhi::formatInfo(td->format).name,
                             td->width, td->height));
+        hardwareSrgb = td->format == rhi::Format::RGBA8_SRGB;
     }
 
     // Camera basis without scale: forward = -Z, right = X, up = Y (Gram-Schmidt).
@@ -320,7 +326,8 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
     } else if (!s.ensureTarget(kOutput, why)) {
         return fail(why);
     }
-    if (drawing && (!s.gbufferPass.prepare(albedo, why) || !s.lightingPass.prepare(albedo, why)))
+    if (drawing &&
+        (!s.gbufferPass.prepare(albedo, why) || !s.lightingPass.prepare(albedo, hardwareSrgb, why)))
         return fail(why);
 
     // ---- frame data -----------------------------------------------------------------------------
@@ -338,7 +345,7 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
     fd.frame.ambient = glm::vec4(desc.settings.ambient, desc.settings.exposure);
     fd.frame.background = glm::vec4(desc.settings.background, 1.0f);
     fd.frame.params = {uint32_t(lights.size()), uint32_t(desc.settings.shading),
-                       uint32_t(desc.settings.toneMapper), 0u};
+                       uint32_t(desc.settings.toneMapper), hardwareSrgb ? 1u : 0u};
     for (const ecs::Material* m : materials) {
         GpuMaterial g;
         g.baseColor = m->baseColor;
@@ -437,12 +444,15 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
         }
         transientTargetBytes +=
             s.gbufferPass.add(graph, scene, gb, std::move(draws), desc.width, desc.height);
-        s.lightingPass.add(graph, scene, gb, output, desc.width, desc.height);
+        s.lightingPass.add(graph, scene, gb, output, hardwareSrgb, desc.width, desc.height);
     } else {
         const glm::vec3 bg = desc.settings.background * desc.settings.exposure;
         std::array<float, 4> encoded{};
-        for (int c = 0; c < 3; ++c)
-            encoded[size_t(c)] = reference::srgbEncode(reference::toneMap(desc.settings.toneMapper, bg[c]));
+        // An sRGB target encodes on write (clears included): give it the linear value.
+        for (int c = 0; c < 3; ++c) {
+            const float mapped = reference::toneMap(desc.settings.toneMapper, bg[c]);
+            encoded[size_t(c)] = hardwareSrgb ? mapped : reference::srgbEncode(mapped);
+        }
         encoded[3] = 1.0f;
         s.lightingPass.addBackground(graph, output, encoded);
     }

@@ -57,7 +57,8 @@ struct FrameDesc {
     uint32_t height = 0;
     ecs::Entity camera = ecs::kNullEntity;  // must have Camera + Transform
     scene::RenderSettings settings;
-    // Optional external colour target (RGBA8_UNORM, e.g. a window backbuffer) and the access state
+    // Optional external colour target (RGBA8_UNORM, or RGBA8_SRGB which encodes in hardware; e.g. a
+    // window backbuffer) and the access state
     // it is in; the output is written there instead of the renderer's own texture and left in
     // `targetFinalAccess`.
     rhi::TextureHandle target;

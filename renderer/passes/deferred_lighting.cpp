@@ -18,8 +18,8 @@ DeferredLightingPass::~DeferredLightingPass() {
     if (m_sampler) m_device.destroy(m_sampler);
 }
 
-bool DeferredLightingPass::prepare(bool albedo, std::string& error) {
-    Variant& v = m_variants[albedo ? 1 : 0];
+bool DeferredLightingPass::prepare(bool albedo, bool srgbTarget, std::string& error) {
+    Variant& v = m_variants[variantIndex(albedo, srgbTarget)];
     if (v.pipeline) return true;
     if (!v.vs)
         v.vs = m_device.createShader(albedo ? shaders::deferred_lighting_albedo::vertex()
@@ -34,7 +34,7 @@ bool DeferredLightingPass::prepare(bool albedo, std::string& error) {
     rhi::GraphicsPipelineDesc d;
     d.vertexShader = v.vs;
     d.fragmentShader = v.fs;
-    d.colorFormats = {rhi::Format::RGBA8_UNORM};
+    d.colorFormats = {srgbTarget ? rhi::Format::RGBA8_SRGB : rhi::Format::RGBA8_UNORM};
     d.debugName = albedo ? "deferred_lighting_albedo" : "deferred_lighting";
     v.pipeline = m_device.createGraphicsPipeline(d);
     if (!v.pipeline) {
@@ -55,15 +55,15 @@ bool DeferredLightingPass::prepare(bool albedo, std::string& error) {
 }
 
 void DeferredLightingPass::add(fg::FrameGraph& graph, const SceneBuffers& scene,
-                               const GBufferTargets& gbuffer, fg::TextureRef output, uint32_t width,
-                               uint32_t height) {
+                               const GBufferTargets& gbuffer, fg::TextureRef output, bool srgbTarget,
+                               uint32_t width, uint32_t height) {
     struct Data {
         SceneBuffers scene;
         GBufferTargets gb;
         fg::TextureRef output;
     };
     const bool albedo = gbuffer.albedo.isValid();
-    const rhi::PipelineHandle pipeline = m_variants[albedo ? 1 : 0].pipeline;
+    const rhi::PipelineHandle pipeline = m_variants[variantIndex(albedo, srgbTarget)].pipeline;
     const rhi::SamplerHandle sampler = m_sampler;
     graph.addPass<Data>(
         "lighting", fg::PassKind::Raster,

@@ -23,12 +23,14 @@ public:
     DeferredLightingPass(const DeferredLightingPass&) = delete;
     DeferredLightingPass& operator=(const DeferredLightingPass&) = delete;
 
-    // Creates the pipeline variant (albedo from the G-buffer or from the material) on first use.
-    bool prepare(bool albedo, std::string& error);
+    // Creates the pipeline variant (albedo from the G-buffer or from the material; output
+    // RGBA8_UNORM with the sRGB OETF in the shader, or RGBA8_SRGB encoded by the hardware) on
+    // first use.
+    bool prepare(bool albedo, bool srgbTarget, std::string& error);
 
-    // Shades the G-buffer into `output` (RGBA8_UNORM colour target).
+    // Shades the G-buffer into `output` (an RGBA8_UNORM, or with srgbTarget RGBA8_SRGB, target).
     void add(fg::FrameGraph& graph, const SceneBuffers& scene, const GBufferTargets& gbuffer,
-             fg::TextureRef output, uint32_t width, uint32_t height);
+             fg::TextureRef output, bool srgbTarget, uint32_t width, uint32_t height);
     // Background only: clears `output` to `encoded` (display-encoded RGBA in [0, 1]).
     void addBackground(fg::FrameGraph& graph, fg::TextureRef output, std::array<float, 4> encoded);
 
@@ -38,7 +40,8 @@ private:
         rhi::ShaderHandle vs, fs;
         rhi::PipelineHandle pipeline;
     };
-    Variant m_variants[2];  // [0] base colour from materials, [1] from the albedo target
+    static int variantIndex(bool albedo, bool srgbTarget) { return (albedo ? 1 : 0) + (srgbTarget ? 2 : 0); }
+    Variant m_variants[4];  // bit 0: base colour from the albedo target; bit 1: RGBA8_SRGB output
     rhi::SamplerHandle m_sampler;
 };
 

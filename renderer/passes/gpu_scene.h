@@ -20,7 +20,7 @@ struct GpuFrame {
     glm::vec4 viewport;    // width, height, 1 / width, 1 / height
     glm::vec4 ambient;     // rgb ambient, w exposure
     glm::vec4 background;  // rgb background radiance
-    glm::uvec4 params;     // x light count, y shading model, z tone mapper
+    glm::uvec4 params;     // x light count, y shading model, z tone mapper, w 1 = sRGB target
 };
 static_assert(sizeof(GpuFrame) == 2 * 64 + 8 * 16);
 

@@ -60,5 +60,5 @@ void main() {
         }
     }
     vec3 mapped = toneMap(frame.params.z, radiance * frame.ambient.w);
-    outColor = vec4(srgbEncode(mapped), 1.0);
+    outColor = vec4(frame.params.w != 0u ? mapped : srgbEncode(mapped), 1.0);
 }

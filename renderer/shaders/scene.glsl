@@ -12,7 +12,7 @@ layout(set = 0, binding = 0) uniform Frame {
     vec4 viewport;      // width, height, 1 / width, 1 / height
     vec4 ambient;       // rgb ambient radiance, w exposure
     vec4 background;    // rgb background radiance
-    uvec4 params;       // x light count, y shading model, z tone mapper, w unused
+    uvec4 params;       // x light count, y shading model, z tone mapper, w 1 = target encodes sRGB
 } frame;
 
 struct Material {
