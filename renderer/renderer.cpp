@@ -20,7 +20,11 @@ public:
     }
 };
 
-rhi::LogCallback logToEngine() {
+}  // namespace
+
+PENUMBRA_STATIC_PLUGIN(RendererPlugin, "penumbra.renderer")
+
+rhi::LogCallback engineLogCallback() {
     return [](rhi::LogSeverity s, std::string_view msg) {
         using log::Severity;
         log::write(s == rhi::LogSeverity::Error     ? Severity::Error
@@ -30,10 +34,6 @@ rhi::LogCallback logToEngine() {
                    msg);
     };
 }
-
-}  // namespace
-
-PENUMBRA_STATIC_PLUGIN(RendererPlugin, "penumbra.renderer")
 
 std::unique_ptr<Renderer> Renderer::create(Engine& engine, const RendererDesc& desc, std::string& error) {
     const auto* factory = engine.plugins().factories().find<SceneRendererFactoryFn>(kRendererFactoryKind,
@@ -51,7 +51,7 @@ std::unique_ptr<Renderer> Renderer::create(Engine& engine, const RendererDesc& d
     deviceDesc.headless = desc.window == nullptr;
     deviceDesc.window = desc.window;
     deviceDesc.vsync = desc.vsync;
-    deviceDesc.log = logToEngine();
+    deviceDesc.log = engineLogCallback();
     r->m_device = rhi::createDevice(deviceDesc);
     if (!r->m_device) {
         error = fmt::format("no usable graphics device for backend '{}'", rhi::toString(desc.backend));

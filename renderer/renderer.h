@@ -30,6 +30,9 @@ inline constexpr const char* kDeferredRendererName = "deferred";
 // The factory signature registered under (kRendererFactoryKind, kDeferredRendererName).
 using SceneRendererFactoryFn = std::unique_ptr<render::SceneRenderer>(rhi::Device& device);
 
+// Routes a device's messages into the engine log (engine/core/log.h) at the matching severity.
+rhi::LogCallback engineLogCallback();
+
 struct RendererDesc {
     rhi::Backend backend = rhi::Backend::Auto;
     bool validation = false;  // RHI validation + Vulkan layers / GL debug output

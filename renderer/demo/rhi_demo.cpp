@@ -12,6 +12,8 @@
 #include <shaders/demo_shade.h>
 #include <shaders/demo_trace.h>
 
+#include "renderer/passes/pass_common.h"
+
 namespace penumbra::demo {
 namespace {
 
@@ -105,16 +107,6 @@ struct Resources {
         return h;
     }
 };
-
-rhi::BindGroupHandle makeGroup(rhi::Device& device, rhi::PipelineHandle pipeline, uint32_t set,
-                               std::vector<rhi::BindGroupEntry> entries, const char* name) {
-    rhi::BindGroupDesc desc;
-    desc.pipeline = pipeline;
-    desc.set = set;
-    desc.entries = std::move(entries);
-    desc.debugName = name;
-    return device.createBindGroup(desc);
-}
 
 }  // namespace
 
@@ -321,16 +313,16 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             gb.viewDepth = d.viewDepth;
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto scene = makeGroup(
+            auto scene = render::makeBindGroup(
                 ctx.device, tracePipe, 0,
                 {rhi::BindGroupEntry::makeBuffer(0, cameraBuf), rhi::BindGroupEntry::makeBuffer(1, primBuf),
                  rhi::BindGroupEntry::makeBuffer(2, matBuf),
                  rhi::BindGroupEntry::makeSampled(3, ctx.texture(volumeRef), linearSampler)},
                 "demo.trace.scene");
-            auto out = makeGroup(ctx.device, tracePipe, 1,
-                                 {rhi::BindGroupEntry::makeStorage(0, ctx.texture(d.normal)),
-                                  rhi::BindGroupEntry::makeStorage(1, ctx.texture(d.viewDepth))},
-                                 "demo.trace.gbuffer");
+            auto out = render::makeBindGroup(ctx.device, tracePipe, 1,
+                                             {rhi::BindGroupEntry::makeStorage(0, ctx.texture(d.normal)),
+                                              rhi::BindGroupEntry::makeStorage(1, ctx.texture(d.viewDepth))},
+                                             "demo.trace.gbuffer");
             ctx.cmd.bindPipeline(tracePipe);
             ctx.cmd.bindGroup(0, scene);
             ctx.cmd.bindGroup(1, out);
@@ -350,12 +342,13 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             gb.depth = d.depth;
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto camGroup = makeGroup(ctx.device, depthPipe, 0,
+            auto camGroup =
+                render::makeBindGroup(ctx.device, depthPipe, 0,
                                       {rhi::BindGroupEntry::makeBuffer(0, cameraBuf)}, "demo.depth.camera");
-            auto src =
-                makeGroup(ctx.device, depthPipe, 1,
-                          {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.viewDepth), nearestSampler)},
-                          "demo.depth.source");
+            auto src = render::makeBindGroup(
+                ctx.device, depthPipe, 1,
+                {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.viewDepth), nearestSampler)},
+                "demo.depth.source");
             rhi::RenderPassDesc rp;
             rp.depthAttachment.texture = ctx.texture(d.depth);
             rp.depthAttachment.load = rhi::LoadOp::DontCare;
@@ -383,8 +376,8 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             b.write(d.depth, rhi::Access::DepthTargetWrite);
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto camGroup = makeGroup(ctx.device, meshPipe, 0,
-                                      {rhi::BindGroupEntry::makeBuffer(0, cameraBuf)}, "demo.mesh.camera");
+            auto camGroup = render::makeBindGroup(
+                ctx.device, meshPipe, 0, {rhi::BindGroupEntry::makeBuffer(0, cameraBuf)}, "demo.mesh.camera");
             rhi::RenderPassDesc rp;
             rp.colorAttachments = {{ctx.texture(d.normal), 0, 0, rhi::LoadOp::Load},
                                    {ctx.texture(d.viewDepth), 0, 0, rhi::LoadOp::Load}};
@@ -416,17 +409,17 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             b.write(finalRef, rhi::Access::ColorTarget);
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto scene = makeGroup(
+            auto scene = render::makeBindGroup(
                 ctx.device, shadePipe, 0,
                 {rhi::BindGroupEntry::makeBuffer(0, cameraBuf), rhi::BindGroupEntry::makeBuffer(1, primBuf),
                  rhi::BindGroupEntry::makeBuffer(2, matBuf),
                  rhi::BindGroupEntry::makeSampled(3, ctx.texture(volumeRef), linearSampler)},
                 "demo.shade.scene");
-            auto gbuf =
-                makeGroup(ctx.device, shadePipe, 1,
-                          {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.normal), nearestSampler),
-                           rhi::BindGroupEntry::makeSampled(1, ctx.texture(d.viewDepth), nearestSampler)},
-                          "demo.shade.gbuffer");
+            auto gbuf = render::makeBindGroup(
+                ctx.device, shadePipe, 1,
+                {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.normal), nearestSampler),
+                 rhi::BindGroupEntry::makeSampled(1, ctx.texture(d.viewDepth), nearestSampler)},
+                "demo.shade.gbuffer");
             rhi::RenderPassDesc rp;
             rp.colorAttachments = {{ctx.texture(finalRef), 0, 0, rhi::LoadOp::DontCare}};
             rp.debugName = "demo.shade";

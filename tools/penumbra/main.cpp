@@ -19,6 +19,7 @@
 #include "engine/core/log.h"
 #include "engine/image/image.h"
 #include "renderer/demo/rhi_demo.h"
+#include "renderer/renderer.h"
 #include "rhi/device.h"
 
 namespace {
@@ -44,14 +45,7 @@ std::unique_ptr<rhi::Device> openDevice(const DeviceOptions& opt) {
         penumbra::log::error("unknown backend '{}'", opt.backend);
         return nullptr;
     }
-    desc.log = [](rhi::LogSeverity s, std::string_view msg) {
-        using penumbra::log::Severity;
-        penumbra::log::write(s == rhi::LogSeverity::Error     ? Severity::Error
-                             : s == rhi::LogSeverity::Warning ? Severity::Warning
-                             : s == rhi::LogSeverity::Info    ? Severity::Info
-                                                              : Severity::Debug,
-                             msg);
-    };
+    desc.log = penumbra::engineLogCallback();
     auto device = rhi::createDevice(desc);
     if (!device)
         penumbra::log::error("no usable graphics device (backend '{}')",
