@@ -432,14 +432,30 @@ struct Rect {
 // ---------------------------------------------------------------------------------------------
 // Barriers (data). The frame graph emits these; pass code never does.
 // ---------------------------------------------------------------------------------------------
+// Mip levels and array layers of a texture; kRemaining counts run to the end of the texture.
+inline constexpr uint32_t kRemaining = 0xffffffffu;
+struct TextureRange {
+    uint32_t baseMip = 0;
+    uint32_t mipCount = kRemaining;
+    uint32_t baseLayer = 0;
+    uint32_t layerCount = kRemaining;
+    bool isWhole() const {
+        return baseMip == 0 && mipCount == kRemaining && baseLayer == 0 && layerCount == kRemaining;
+    }
+    friend bool operator==(const TextureRange&, const TextureRange&) = default;
+};
+
 struct Barrier {
     BufferHandle buffer;    // exactly one of buffer / texture is valid
-    TextureHandle texture;  // whole texture (all mips and layers)
+    TextureHandle texture;  // the subresources in `range` (default: all mips and layers)
     Access before = Access::None;
     Access after = Access::None;
+    TextureRange range;  // textures only
 
-    static Barrier buf(BufferHandle b, Access before, Access after) { return {b, {}, before, after}; }
-    static Barrier tex(TextureHandle t, Access before, Access after) { return {{}, t, before, after}; }
+    static Barrier buf(BufferHandle b, Access before, Access after) { return {b, {}, before, after, {}}; }
+    static Barrier tex(TextureHandle t, Access before, Access after, TextureRange range = {}) {
+        return {{}, t, before, after, range};
+    }
 };
 
 // ---------------------------------------------------------------------------------------------
