@@ -12,6 +12,7 @@
 #include "rhi/common/backend_factories.h"
 #include "rhi/common/deferred_release.h"
 #include "rhi/common/handle_pool.h"
+#include "rhi/common/subresource_states.h"
 #include "rhi/validation/resource_util.h"
 #include "rhi/validation/validation_device.h"
 
@@ -245,6 +246,7 @@ public:
         p->shaders.push_back(shader->reflection);
         p->computeDesc = desc;
         PipelineHandle h = m_pipelines.insert(std::move(p));
+        if (h) ++m_stats.pipelinesCreated;
         if (!h) error("createComputePipeline: too many pipelines");
         return h;
     }
@@ -269,6 +271,7 @@ public:
         p->shaders = {vs->reflection, fs->reflection};
         p->graphicsDesc = desc;
         PipelineHandle h = m_pipelines.insert(std::move(p));
+        if (h) ++m_stats.pipelinesCreated;
         if (!h) error("createGraphicsPipeline: too many pipelines");
         return h;
     }
@@ -302,6 +305,7 @@ public:
             }
         }
         BindGroupHandle h = m_bindGroups.insert(std::make_shared<NullBindGroup>(NullBindGroup{desc}));
+        if (h) ++m_stats.bindGroupsCreated;
         if (!h) error("createBindGroup: too many bind groups");
         return h;
     }
@@ -450,6 +454,17 @@ public:
     }
 
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override {
+        ++m_stats.blockingTimestampReads;
+        return readTimestampsImpl(pool, first, count, outNs, true);
+    }
+    // Timestamps of submitted lists are available at once (the CPU clock at submission).
+    bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override {
+        return readTimestampsImpl(pool, first, count, outNs, false);
+    }
+    DeviceStats stats() const override { return m_stats; }
+
+    bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs,
+                            bool wait) {
         NullQueryPool* q = findQueryPool(pool, "readTimestamps");
         if (!q) return false;
         if (!rangeInside(first, count, q->desc.count)) {
@@ -459,6 +474,7 @@ public:
         }
         for (uint32_t i = 0; i < count; ++i) {
             if (!q->written[first + i]) {
+                if (!wait) return false;  // not submitted yet: not available
                 error("readTimestamps: query " + std::to_string(first + i) + " of pool '" +
                       q->desc.debugName + "' was never written by a submitted command list");
                 return false;
@@ -624,6 +640,7 @@ private:
     detail::DeferredReleaseQueue m_deferred;
     std::vector<std::unique_ptr<NullCommandList>> m_openLists;
     std::vector<RecordedCommand> m_recorded;
+    DeviceStats m_stats;
     uint64_t m_submitted = 0;
     uint64_t m_lastTimestamp = 0;
 };
@@ -644,6 +661,11 @@ void NullCommandList::barrier(std::span<const Barrier> barriers) {
         }
         if (b.texture && !m_device.isAlive(b.texture)) {
             m_device.error("barrier: stale or foreign texture handle");
+            continue;
+        }
+        TextureRange range;
+        if (b.texture && !detail::resolveRange(*m_device.describe(b.texture), b.range, range)) {
+            m_device.error("barrier: the texture has no such subresource range");
             continue;
         }
         kept.push_back(b);

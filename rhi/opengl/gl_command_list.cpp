@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstring>
 
+#include "rhi/common/subresource_states.h"
 #include "rhi/opengl/gl_device.h"
 
 namespace rhi::gl {
@@ -81,6 +82,15 @@ void GlCommandList::barrier(std::span<const Barrier> barriers) {
         }
         if (b.texture && !m_device.m_textures.contains(b.texture)) {
             error("barrier: invalid or destroyed texture handle");
+            continue;
+        }
+        // glMemoryBarrier has no ranges: a barrier on some mips or layers orders the whole texture.
+        TextureRange range;
+        if (b.texture &&
+            !detail::resolveRange(m_device.m_textures.get(b.texture)->get()->desc, b.range, range)) {
+            error("barrier: the texture has no subresource range (base mip " +
+                  std::to_string(b.range.baseMip) + ", base layer " + std::to_string(b.range.baseLayer) +
+                  ") of that size");
             continue;
         }
         if (any(b.before & kBarrierWrites)) bits |= barrierBits(b.after, b.texture.isValid());

@@ -597,6 +597,7 @@ PipelineHandle GlDevice::createComputePipeline(const ComputePipelineDesc& desc) 
     if (!compileProgram({shader.name}, obj->debugName, obj->program)) return {};
     const GLuint program = obj->program;
     PipelineHandle h = m_pipelines.insert(std::move(obj));
+    if (h) ++m_stats.pipelinesCreated;
     if (!h) {
         error(what + ": too many live pipelines");
         m_gl.DeleteProgram(program);
@@ -701,6 +702,7 @@ PipelineHandle GlDevice::createGraphicsPipeline(const GraphicsPipelineDesc& desc
 
     const GLuint program = obj->program, vao = obj->vao;
     PipelineHandle h = m_pipelines.insert(std::move(obj));
+    if (h) ++m_stats.pipelinesCreated;
     if (!h) {
         error(what + ": too many live pipelines");
         m_gl.DeleteProgram(program);
@@ -826,6 +828,7 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
         obj->binds.push_back(b);
     }
     BindGroupHandle h = m_bindGroups.insert(std::move(obj));
+    if (h) ++m_stats.bindGroupsCreated;
     if (!h) error(what + ": too many live bind groups");
     return h;
 }
@@ -1156,23 +1159,41 @@ bool GlDevice::readTexture(TextureHandle src, TextureSubresource sub, Access /*c
 }
 
 bool GlDevice::readTimestamps(QueryPoolHandle poolHandle, uint32_t first, uint32_t count, uint64_t* outNs) {
+    ++m_stats.blockingTimestampReads;
+    return readTimestampsImpl(poolHandle, first, count, outNs, true, "readTimestamps");
+}
+
+bool GlDevice::tryReadTimestamps(QueryPoolHandle poolHandle, uint32_t first, uint32_t count,
+                                 uint64_t* outNs) {
+    return readTimestampsImpl(poolHandle, first, count, outNs, false, "tryReadTimestamps");
+}
+
+bool GlDevice::readTimestampsImpl(QueryPoolHandle poolHandle, uint32_t first, uint32_t count, uint64_t* outNs,
+                                  bool wait, const char* fn) {
     if (!activate()) return false;
     auto* pp = m_queryPools.get(poolHandle);
     if (!pp) {
-        error("readTimestamps: invalid or destroyed query pool handle");
+        error(std::string(fn) + ": invalid or destroyed query pool handle");
         return false;
     }
     QueryPoolObj& pool = **pp;
     if (!outNs || count == 0 || first >= pool.queries.size() || count > pool.queries.size() - first) {
-        error("readTimestamps " + quoted(pool.debugName) + ": range [" + std::to_string(first) + ", +" +
+        error(std::string(fn) + " " + quoted(pool.debugName) + ": range [" + std::to_string(first) + ", +" +
               std::to_string(count) + ") is empty or out of range");
         return false;
     }
     for (uint32_t i = first; i < first + count; ++i) {
-        if (!pool.written[i]) {
-            error("readTimestamps " + quoted(pool.debugName) + ": slot " + std::to_string(i) +
-                  " was never written by a submitted command list");
-            return false;
+        if (pool.written[i]) continue;
+        if (!wait) return false;  // its command list was not submitted yet
+        error(std::string(fn) + " " + quoted(pool.debugName) + ": slot " + std::to_string(i) +
+              " was never written by a submitted command list");
+        return false;
+    }
+    if (!wait) {
+        for (uint32_t i = first; i < first + count; ++i) {
+            GLuint64 available = 0;
+            m_gl.GetQueryObjectui64v(pool.queries[i], GL_QUERY_RESULT_AVAILABLE, &available);
+            if (!available) return false;
         }
     }
     for (uint32_t i = 0; i < count; ++i) {

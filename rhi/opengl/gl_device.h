@@ -237,6 +237,8 @@ public:
     bool readTexture(TextureHandle src, TextureSubresource sub, Access currentAccess,
                      std::vector<uint8_t>& out) override;
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
+    bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
+    DeviceStats stats() const override { return m_stats; }
 
     TextureHandle acquireBackbuffer() override;
     Format backbufferFormat() const override { return kBackbufferFormat; }
@@ -264,6 +266,8 @@ private:
     bool mergeLayout(std::vector<BindingSlot>& layout, const ShaderObj& shader,
                      const std::string& pipelineName);
     bool createBackbuffer(uint32_t width, uint32_t height);
+    bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs, bool wait,
+                            const char* fn);
 
     // --- replay (GL calls issued at submit) ---------------------------------------------------------
     struct VertexBinding {
@@ -339,6 +343,7 @@ private:
     uint32_t m_backbufferWidth = 0;
     uint32_t m_backbufferHeight = 0;
     GLuint m_presentFbo = 0;
+    DeviceStats m_stats;
 };
 
 }  // namespace rhi::gl

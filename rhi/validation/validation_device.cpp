@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "rhi/common/backend_factories.h"
+#include "rhi/common/subresource_states.h"
 #include "rhi/validation/resource_util.h"
 
 namespace rhi::detail {
@@ -32,9 +33,10 @@ struct BufferInfo {
     Access state = Access::None;
 };
 
+// Per mip and layer: the state the last barrier (or upload) left it in.
 struct TextureInfo {
     TextureDesc desc;
-    Access state = Access::None;
+    SubresourceStates states;
 };
 
 struct SamplerInfo {
@@ -315,7 +317,7 @@ public:
             return {};
         }
         TextureHandle h = m_inner->createTexture(desc);
-        if (h) m_textures.add(h.value, TextureInfo{desc, Access::None});
+        if (h) m_textures.add(h.value, TextureInfo{desc, SubresourceStates(desc)});
         return h;
     }
 
@@ -611,7 +613,7 @@ public:
             return;
         }
         m_inner->writeTexture(dst, sub, data, size);
-        t->state = Access::ShaderSampled;
+        t->states.setAll(Access::ShaderSampled);
     }
 
     void* mappedPointer(BufferHandle h) override {
@@ -679,17 +681,28 @@ public:
         TextureInfo* t = texture(src, fn, "src");
         if (!t) return false;
         if (!checkSubresource(fn, *t, sub)) return false;
-        if (currentAccess != t->state) {
+        const Access tracked = t->states.get(sub.mip, sub.layer);
+        if (currentAccess != tracked) {
             report(fn, "texture " + quoted(t->desc.debugName) + " is passed as being in state " +
                            toString(currentAccess) + " but its tracked state (last barrier / upload) is " +
-                           toString(t->state));
+                           toString(tracked));
             return false;
         }
         return m_inner->readTexture(src, sub, currentAccess, out);
     }
 
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override {
-        const char* fn = "readTimestamps";
+        return checkTimestampRead("readTimestamps", pool, first, count, outNs) &&
+               m_inner->readTimestamps(pool, first, count, outNs);
+    }
+
+    bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override {
+        return checkTimestampRead("tryReadTimestamps", pool, first, count, outNs) &&
+               m_inner->tryReadTimestamps(pool, first, count, outNs);
+    }
+
+    bool checkTimestampRead(const char* fn, QueryPoolHandle pool, uint32_t first, uint32_t count,
+                            const uint64_t* outNs) {
         QueryPoolInfo* q = queryPool(pool, fn, "pool");
         if (!q) return false;
         if (!rangeInside(first, count, q->desc.count)) {
@@ -702,8 +715,10 @@ public:
             report(fn, "output pointer is null");
             return false;
         }
-        return m_inner->readTimestamps(pool, first, count, outNs);
+        return true;
     }
+
+    DeviceStats stats() const override { return m_inner->stats(); }
 
     // --- presentation ----------------------------------------------------------------------------
     TextureHandle acquireBackbuffer() override {
@@ -833,7 +848,7 @@ private:
 
     void adoptTexture(TextureHandle h) {
         if (const TextureDesc* d = m_inner->describe(h))
-            m_textures.add(h.value, TextureInfo{*d, Access::None});
+            m_textures.add(h.value, TextureInfo{*d, SubresourceStates(*d)});
     }
     void adoptBuffer(BufferHandle h) {
         if (const BufferDesc* d = m_inner->describe(h))
@@ -930,33 +945,61 @@ public:
                        toString(suggested));
     }
 
-    void useTexture(const char* fn, TextureInfo& t, const std::string& where, const char* verb,
-                    Access accepted, Access suggested) {
-        if (any(t.state & accepted)) return;
-        report(fn, "texture " + quoted(t.desc.debugName) + where + " " + verb + " but its state is " +
-                       toString(t.state) + "; add a barrier " + toString(t.state) + " -> " +
-                       toString(suggested));
+    // A use of the subresources `range` of a texture; each must be in an accepted state. One
+    // report per run of subresources sharing a wrong state (the range is named unless whole).
+    void useTexture(const char* fn, TextureInfo& t, TextureRange range, const std::string& where,
+                    const char* verb, Access accepted, Access suggested) {
+        TextureRange r;
+        if (!resolveRange(t.desc, range, r)) return;  // ranges are checked where they are given
+        t.states.forEachRun(r, [&](const TextureRange& run, Access state) {
+            if (any(state & accepted)) return;
+            const std::string sub = run == t.states.whole() ? std::string() : " (" + describeRange(run) + ")";
+            report(fn, "texture " + quoted(t.desc.debugName) + sub + where + " " + verb +
+                           " but its state is " + toString(state) + "; add a barrier " + toString(state) +
+                           " -> " + toString(suggested));
+        });
     }
 
-    void applyBarrier(const char* fn, const Barrier& b) {
+    // False: the barrier names a range the texture does not have (reported; drop the barrier).
+    bool applyBarrier(const char* fn, const Barrier& b) {
         if (b.buffer) {
             BufferInfo* info = buffer(b.buffer, fn, "barrier");
-            if (!info) return;
+            if (!info) return false;
             if (!info->hostInitialised && b.before != Access::None && b.before != info->state) {
                 report(fn, "buffer " + quoted(info->desc.debugName) + " barrier says before = " +
                                toString(b.before) + " but its tracked state is " + toString(info->state));
             }
             info->hostInitialised = false;
             info->state = b.after;
-        } else {
-            TextureInfo* info = texture(b.texture, fn, "barrier");
-            if (!info) return;
-            if (b.before != Access::None && b.before != info->state) {
-                report(fn, "texture " + quoted(info->desc.debugName) + " barrier says before = " +
-                               toString(b.before) + " but its tracked state is " + toString(info->state));
-            }
-            info->state = b.after;
+            return true;
         }
+        TextureInfo* info = texture(b.texture, fn, "barrier");
+        if (!info) return false;
+        TextureRange r;
+        if (!resolveRange(info->desc, b.range, r)) {
+            report(fn, "texture " + quoted(info->desc.debugName) + " barrier names mips " +
+                           std::to_string(b.range.baseMip) + " +" + countText(b.range.mipCount) +
+                           ", layers " + std::to_string(b.range.baseLayer) + " +" +
+                           countText(b.range.layerCount) + " but the texture has " +
+                           std::to_string(info->desc.mipLevels) + " mips and " +
+                           std::to_string(info->states.layers()) + " layers");
+            return false;
+        }
+        if (b.before != Access::None) {
+            info->states.forEachRun(r, [&](const TextureRange& run, Access state) {
+                if (state == b.before) return;
+                const std::string sub =
+                    run == info->states.whole() ? std::string() : " (" + describeRange(run) + ")";
+                report(fn, "texture " + quoted(info->desc.debugName) + sub + " barrier says before = " +
+                               toString(b.before) + " but its tracked state is " + toString(state));
+            });
+        }
+        info->states.set(r, b.after);
+        return true;
+    }
+
+    static std::string countText(uint32_t count) {
+        return count == kRemaining ? std::string("all") : std::to_string(count);
     }
 };
 
@@ -976,8 +1019,7 @@ void ValidationCommandList::barrier(std::span<const Barrier> barriers) {
         if (b.buffer ? !m_device.buffer(b.buffer, fn, "barrier")
                      : !m_device.texture(b.texture, fn, "barrier"))
             continue;
-        m_device.applyBarrier(fn, b);
-        kept.push_back(b);
+        if (m_device.applyBarrier(fn, b)) kept.push_back(b);
     }
     if (!kept.empty()) m_inner.barrier(kept);
 }
@@ -1180,13 +1222,15 @@ void ValidationCommandList::checkResourceStates(const char* fn) {
                 TextureInfo* tex = m_device.texture(e.texture, fn, "bind group entry");
                 if (!tex) continue;
                 if (b->type == BindingType::SampledTexture) {
-                    m_device.useTexture(fn, *tex, where, "is sampled", Access::ShaderSampled,
+                    m_device.useTexture(fn, *tex, TextureRange{}, where, "is sampled", Access::ShaderSampled,
                                         Access::ShaderSampled);
                 } else if (b->writes) {
-                    m_device.useTexture(fn, *tex, where, "is written as a storage image", Access::ShaderWrite,
+                    m_device.useTexture(fn, *tex, TextureRange{e.mip, 1, 0, kRemaining}, where,
+                                        "is written as a storage image", Access::ShaderWrite,
                                         Access::ShaderWrite);
                 } else {
-                    m_device.useTexture(fn, *tex, where, "is read as a storage image",
+                    m_device.useTexture(fn, *tex, TextureRange{e.mip, 1, 0, kRemaining}, where,
+                                        "is read as a storage image",
                                         Access::ShaderRead | Access::ShaderWrite, Access::ShaderRead);
                 }
             }
@@ -1283,6 +1327,7 @@ void ValidationCommandList::beginRenderPass(const RenderPassDesc& desc) {
         TextureInfo* tex;
         std::string where;
         bool depth;
+        TextureRange range;  // the attached subresource
     };
     std::vector<Use> uses;
     uint32_t width = 0, height = 0;
@@ -1319,7 +1364,9 @@ void ValidationCommandList::beginRenderPass(const RenderPassDesc& desc) {
         }
         checkExtent(*t, a.mip, where);
         colorFormats.push_back(t->desc.format);
-        uses.push_back({t, where, false});
+        uses.push_back(
+            {t, where, false,
+             TextureRange{a.mip, 1, t->desc.dimension == TextureDimension::Tex3D ? 0 : a.layer, 1}});
     }
     Format depthFormat = Format::Undefined;
     if (desc.depthAttachment.texture) {
@@ -1332,19 +1379,19 @@ void ValidationCommandList::beginRenderPass(const RenderPassDesc& desc) {
         } else {
             checkExtent(*t, 0, " (depth attachment)");
             depthFormat = t->desc.format;
-            uses.push_back({t, " (depth attachment)", true});
+            uses.push_back({t, " (depth attachment)", true, TextureRange{0, 1, 0, 1}});
         }
     }
     if (!ok) return;
     for (const Use& u : uses) {
         if (!u.depth)
-            m_device.useTexture(fn, *u.tex, u.where, "is rendered to", Access::ColorTarget,
+            m_device.useTexture(fn, *u.tex, u.range, u.where, "is rendered to", Access::ColorTarget,
                                 Access::ColorTarget);
         else if (desc.depthAttachment.readOnly)
-            m_device.useTexture(fn, *u.tex, u.where, "is a read-only depth target",
+            m_device.useTexture(fn, *u.tex, u.range, u.where, "is a read-only depth target",
                                 Access::DepthTargetRead | Access::DepthTargetWrite, Access::DepthTargetRead);
         else
-            m_device.useTexture(fn, *u.tex, u.where, "is a depth target", Access::DepthTargetWrite,
+            m_device.useTexture(fn, *u.tex, u.range, u.where, "is a depth target", Access::DepthTargetWrite,
                                 Access::DepthTargetWrite);
     }
     m_inPass = true;

@@ -120,6 +120,13 @@ void VulkanCommandList::barrier(std::span<const Barrier> barriers) {
         }
         TextureRes* t = m_dev.texture(b.texture, "barrier");
         if (!t) continue;
+        TextureRange range;
+        if (!detail::resolveRange(t->desc, b.range, range)) {
+            error("barrier: texture '" + t->desc.debugName + "' has no subresource range (base mip " +
+                  std::to_string(b.range.baseMip) + ", base layer " + std::to_string(b.range.baseLayer) +
+                  ") of that size");
+            continue;
+        }
         // Barriers of one vkCmdPipelineBarrier2 are unordered: a second transition of the same
         // image in this call goes into a following one.
         if (std::any_of(imageBarriers.begin(), imageBarriers.end(),
@@ -143,10 +150,11 @@ void VulkanCommandList::barrier(std::span<const Barrier> barriers) {
             ib.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
             ib.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
             ib.image = t->image;
-            ib.subresourceRange = {t->aspect, 0, VK_REMAINING_MIP_LEVELS, 0, VK_REMAINING_ARRAY_LAYERS};
+            ib.subresourceRange = {t->aspect, range.baseMip, range.mipCount, range.baseLayer,
+                                   range.layerCount};
             imageBarriers.push_back(ib);
         }
-        t->state = b.after;
+        t->states.set(range, b.after);
     }
     flush();
 }
@@ -373,9 +381,12 @@ void VulkanCommandList::beginRenderPass(const RenderPassDesc& desc) {
             error(att + ": layer " + std::to_string(ca.layer) + " out of range");
             return;
         }
-        const VkImageLayout layout = m_dev.layoutOf(*t, t->state);
+        // A Tex3D attachment is a depth slice of the mip's volume (one state per mip).
+        const Access state =
+            t->states.get(ca.mip, t->desc.dimension == TextureDimension::Tex3D ? 0 : ca.layer);
+        const VkImageLayout layout = m_dev.layoutOf(*t, state);
         if (layout != VK_IMAGE_LAYOUT_COLOR_ATTACHMENT_OPTIMAL && layout != VK_IMAGE_LAYOUT_GENERAL) {
-            error(att + " is in state " + toString(t->state) + "; transition it to ColorTarget first");
+            error(att + " is in state " + toString(state) + "; transition it to ColorTarget first");
             return;
         }
         VkImageView view = m_dev.attachmentView(*t, ca.mip, ca.layer);
@@ -408,7 +419,8 @@ void VulkanCommandList::beginRenderPass(const RenderPassDesc& desc) {
             error(att + " lacks DepthTarget usage");
             return;
         }
-        const VkImageLayout layout = m_dev.layoutOf(*t, t->state);
+        const Access state = t->states.get(0, 0);
+        const VkImageLayout layout = m_dev.layoutOf(*t, state);
         const bool writable = layout == VK_IMAGE_LAYOUT_DEPTH_ATTACHMENT_OPTIMAL ||
                               layout == VK_IMAGE_LAYOUT_DEPTH_STENCIL_ATTACHMENT_OPTIMAL ||
                               layout == VK_IMAGE_LAYOUT_GENERAL;
@@ -416,7 +428,7 @@ void VulkanCommandList::beginRenderPass(const RenderPassDesc& desc) {
                               layout == VK_IMAGE_LAYOUT_DEPTH_STENCIL_READ_ONLY_OPTIMAL ||
                               layout == VK_IMAGE_LAYOUT_READ_ONLY_OPTIMAL;
         if (da.readOnly ? !readable : !writable) {
-            error(att + " is in state " + toString(t->state) + "; transition it to " +
+            error(att + " is in state " + toString(state) + "; transition it to " +
                   (da.readOnly ? "DepthTargetRead" : "DepthTargetWrite") + " first");
             return;
         }

@@ -16,6 +16,7 @@
 
 #include "rhi/common/deferred_release.h"
 #include "rhi/common/handle_pool.h"
+#include "rhi/common/subresource_states.h"
 #include "rhi/device.h"
 #include "rhi/vulkan/vk_allocator.h"
 #include "rhi/vulkan/vulkan_inspect.h"
@@ -42,9 +43,9 @@ struct TextureRes {
     VkImageView sampledView = VK_NULL_HANDLE;                   // every mip and layer
     std::vector<VkImageView> storageViews;                      // one per mip (all layers / whole volume)
     std::unordered_map<uint32_t, VkImageView> attachmentViews;  // key: mip << 16 | layer
-    Access state = Access::None;                                // as left by the last recorded barrier
-    bool ownsImage = true;    // false for swapchain images (no memory, the swapchain owns them)
-    bool backbuffer = false;  // handed out by acquireBackbuffer(): the device destroys it
+    detail::SubresourceStates states;  // per mip and layer, as left by the last recorded barrier
+    bool ownsImage = true;             // false for swapchain images (no memory, the swapchain owns them)
+    bool backbuffer = false;           // handed out by acquireBackbuffer(): the device destroys it
 };
 
 struct SamplerRes {
@@ -230,6 +231,8 @@ public:
     bool readTexture(TextureHandle src, TextureSubresource sub, Access currentAccess,
                      std::vector<uint8_t>& out) override;
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
+    bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
+    DeviceStats stats() const override { return m_stats; }
 
     TextureHandle acquireBackbuffer() override;
     Format backbufferFormat() const override;
@@ -308,6 +311,8 @@ private:
     bool createRawBuffer(VkDeviceSize size, VkBufferUsageFlags usage, MemoryType memory, VkBuffer& buffer,
                          Allocation& alloc, const char* what);
     void flushUploadsAndWait();
+    bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs, bool wait,
+                            const char* fn);
 
     // resources
     TextureRes* texture(TextureHandle h, const char* what);
@@ -324,10 +329,14 @@ private:
     VkDescriptorSet descriptorSetFor(BindGroupRes& g);
     void freeBindGroup(const BindGroupRes& g);
     bool buildPipelineLayout(std::span<const ShaderRes* const> shaders, PipelineRes& out);
-    // Records a whole-image barrier before -> after and sets t.state = after. `waitForAllWrites`
-    // widens the source scope to every earlier write (readback, present blits).
+    // Records a barrier before -> after over `range` (resolved; default: the whole image) and sets
+    // the state of those subresources to `after`. `waitForAllWrites` widens the source scope to
+    // every earlier write (readback, present blits).
     void recordImageBarrier(VkCommandBuffer cmd, TextureRes& t, Access before, Access after,
-                            bool waitForAllWrites = false);
+                            bool waitForAllWrites = false, const TextureRange* range = nullptr);
+    // Moves every subresource of `range` (default: whole image) from its tracked state to `after`.
+    void transitionTracked(VkCommandBuffer cmd, TextureRes& t, Access after, bool waitForAllWrites = false,
+                           const TextureRange* range = nullptr);
     VkImageLayout layoutOf(const TextureRes& t, Access a) const;
 
     // swapchain
@@ -396,6 +405,7 @@ private:
     detail::HandlePool<QueryPoolTag, QueryPoolRes> m_queryPools;
 
     Swapchain m_swapchain;
+    DeviceStats m_stats;
 };
 
 }  // namespace rhi::vk

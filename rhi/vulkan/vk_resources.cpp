@@ -342,6 +342,7 @@ TextureHandle VulkanDevice::createTexture(const TextureDesc& desc) {
         releaseTexture(t);
         return {};
     }
+    t.states = detail::SubresourceStates(desc);
     TextureHandle h = m_textures.insert(t);
     if (!h) {
         logError(what + ": too many live textures");
@@ -537,6 +538,7 @@ PipelineHandle VulkanDevice::createComputePipeline(const ComputePipelineDesc& de
     }
     setName(VK_OBJECT_TYPE_PIPELINE, uint64_t(p.pipeline), p.name);
     PipelineHandle h = m_pipelines.insert(p);
+    if (h) ++m_stats.pipelinesCreated;
     if (!h) {
         logError(what + ": too many live pipelines");
         vkDestroyPipeline(m_device, p.pipeline, nullptr);
@@ -733,6 +735,7 @@ PipelineHandle VulkanDevice::createGraphicsPipeline(const GraphicsPipelineDesc& 
     }
     setName(VK_OBJECT_TYPE_PIPELINE, uint64_t(p.pipeline), p.name);
     PipelineHandle h = m_pipelines.insert(p);
+    if (h) ++m_stats.pipelinesCreated;
     if (!h) {
         logError(what + ": too many live pipelines");
         vkDestroyPipeline(m_device, p.pipeline, nullptr);
@@ -874,6 +877,7 @@ BindGroupHandle VulkanDevice::createBindGroup(const BindGroupDesc& desc) {
     writeDescriptors(g, g.set, 0);
     setName(VK_OBJECT_TYPE_DESCRIPTOR_SET, uint64_t(g.set), desc.debugName);
     BindGroupHandle h = m_bindGroups.insert(g);
+    if (h) ++m_stats.bindGroupsCreated;
     if (!h) {
         logError(what + ": too many live bind groups");
         freeBindGroup(g);
@@ -957,7 +961,7 @@ VkDescriptorSet VulkanDevice::descriptorSetFor(BindGroupRes& g) {
     for (const BindGroupRes::Write& w : g.writes) {
         if (!w.sampledTexture) continue;
         const TextureRes* t = m_textures.get(w.sampledTexture);
-        if (sampledIndex < 64 && t && layoutOf(*t, t->state) == VK_IMAGE_LAYOUT_GENERAL)
+        if (sampledIndex < 64 && t && layoutOf(*t, t->states.get(0, 0)) == VK_IMAGE_LAYOUT_GENERAL)
             mask |= uint64_t(1) << sampledIndex;
         ++sampledIndex;
     }
@@ -1184,7 +1188,8 @@ VkImageLayout VulkanDevice::layoutOf(const TextureRes& t, Access a) const {
 }
 
 void VulkanDevice::recordImageBarrier(VkCommandBuffer cmd, TextureRes& t, Access before, Access after,
-                                      bool waitForAllWrites) {
+                                      bool waitForAllWrites, const TextureRange* range) {
+    const TextureRange r = range ? *range : t.states.whole();
     AccessScope src = accessScope(before, true);
     if (waitForAllWrites) {
         src.stages = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
@@ -1214,12 +1219,20 @@ void VulkanDevice::recordImageBarrier(VkCommandBuffer cmd, TextureRes& t, Access
         ib.srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
         ib.dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED;
         ib.image = t.image;
-        ib.subresourceRange = {t.aspect, 0, VK_REMAINING_MIP_LEVELS, 0, VK_REMAINING_ARRAY_LAYERS};
+        ib.subresourceRange = {t.aspect, r.baseMip, r.mipCount, r.baseLayer, r.layerCount};
         dep.imageMemoryBarrierCount = 1;
         dep.pImageMemoryBarriers = &ib;
     }
     vkCmdPipelineBarrier2(cmd, &dep);
-    t.state = after;
+    t.states.set(r, after);
+}
+
+void VulkanDevice::transitionTracked(VkCommandBuffer cmd, TextureRes& t, Access after, bool waitForAllWrites,
+                                     const TextureRange* range) {
+    const TextureRange r = range ? *range : t.states.whole();
+    t.states.forEachRun(r, [&](const TextureRange& run, Access before) {
+        recordImageBarrier(cmd, t, before, after, waitForAllWrites, &run);
+    });
 }
 
 namespace {
@@ -1269,7 +1282,7 @@ void VulkanDevice::writeTexture(TextureHandle dst, TextureSubresource sub, const
     VkCommandBuffer cmd = uploadCommands();
     if (!cmd || !allocateStaging(size, s)) return;
     std::memcpy(s.ptr, data, size);
-    recordImageBarrier(cmd, *t, t->state, Access::CopyDst);
+    transitionTracked(cmd, *t, Access::CopyDst);
     VkBufferImageCopy region{};
     region.bufferOffset = s.offset;
     region.imageSubresource = {t->aspect, sub.mip, layer, 1};
@@ -1362,16 +1375,17 @@ bool VulkanDevice::readTexture(TextureHandle src, TextureSubresource sub, Access
     VkCommandBuffer cmd = beginInternalCommands();
     bool ok = cmd != VK_NULL_HANDLE;
     if (ok) {
-        // Wait for every earlier write to the image, then copy.
-        recordImageBarrier(cmd, *t, currentAccess, Access::CopySrc, true);
+        // Wait for every earlier write to the image, then copy; only the read subresource moves.
+        const TextureRange one = TextureRange{sub.mip, 1, layer, 1};
+        recordImageBarrier(cmd, *t, currentAccess, Access::CopySrc, true, &one);
         VkBufferImageCopy region{};
         region.imageSubresource = {t->aspect, sub.mip, layer, 1};
         region.imageExtent = extent;
         vkCmdCopyImageToBuffer(cmd, t->image, VK_IMAGE_LAYOUT_TRANSFER_SRC_OPTIMAL, staging, 1, &region);
         if (currentAccess != Access::None)
-            recordImageBarrier(cmd, *t, Access::CopySrc, currentAccess);
+            recordImageBarrier(cmd, *t, Access::CopySrc, currentAccess, false, &one);
         else
-            t->state = Access::None;  // contents were undefined; later barriers start from UNDEFINED
+            t->states.set(one, Access::None);  // contents were undefined; later barriers start from UNDEFINED
         auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
         mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
         mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
@@ -1400,43 +1414,56 @@ bool VulkanDevice::readTexture(TextureHandle src, TextureSubresource sub, Access
 }
 
 bool VulkanDevice::readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) {
+    ++m_stats.blockingTimestampReads;
+    return readTimestampsImpl(pool, first, count, outNs, true, "readTimestamps");
+}
+
+bool VulkanDevice::tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) {
+    return readTimestampsImpl(pool, first, count, outNs, false, "tryReadTimestamps");
+}
+
+bool VulkanDevice::readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs,
+                                      bool wait, const char* fn) {
     QueryPoolRes* q = m_queryPools.get(pool);
     if (!q) {
-        logError("readTimestamps: invalid or stale query pool handle");
+        logError(std::string(fn) + ": invalid or stale query pool handle");
         return false;
     }
     if (first >= q->count || count > q->count - first) {
-        logError("readTimestamps: queries [" + std::to_string(first) + ", +" + std::to_string(count) +
+        logError(std::string(fn) + ": queries [" + std::to_string(first) + ", +" + std::to_string(count) +
                  ") exceed the pool of " + std::to_string(q->count));
         return false;
     }
     if (count == 0) return true;
     if (!outNs) {
-        logError("readTimestamps: outNs is null");
+        logError(std::string(fn) + ": outNs is null");
         return false;
     }
-    // Everything submitted so far must finish; queries never written then stay unavailable
-    // (reported below) instead of blocking forever.
-    flushUploadsAndWait();
-    if (!waitSerial(m_lastSubmitted)) return false;
+    if (wait) {
+        // Everything submitted so far must finish; queries never written then stay unavailable
+        // (reported below) instead of blocking forever.
+        flushUploadsAndWait();
+        if (!waitSerial(m_lastSubmitted)) return false;
+    }
     std::vector<uint64_t> data(size_t(count) * 2);
     VkResult r = vkGetQueryPoolResults(m_device, q->pool, first, count, data.size() * sizeof(uint64_t),
                                        data.data(), 2 * sizeof(uint64_t),
                                        VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WITH_AVAILABILITY_BIT);
     if (r != VK_SUCCESS && r != VK_NOT_READY) {
-        logError(std::string("readTimestamps: vkGetQueryPoolResults failed: ") + resultString(r));
+        logError(std::string(fn) + ": vkGetQueryPoolResults failed: " + resultString(r));
+        return false;
+    }
+    for (uint32_t i = 0; i < count; ++i) {
+        if (data[2 * i + 1] != 0) continue;
+        if (!wait) return false;  // not available yet
+        logError(std::string(fn) + ": query " + std::to_string(first + i) +
+                 " has no result (never written by a submitted command list)");
         return false;
     }
     const uint64_t mask =
         m_timestampValidBits >= 64 ? ~uint64_t(0) : ((uint64_t(1) << m_timestampValidBits) - 1);
-    for (uint32_t i = 0; i < count; ++i) {
-        if (data[2 * i + 1] == 0) {
-            logError("readTimestamps: query " + std::to_string(first + i) +
-                     " has no result (never written by a submitted command list)");
-            return false;
-        }
+    for (uint32_t i = 0; i < count; ++i)
         outNs[i] = uint64_t(double(data[2 * i] & mask) * double(m_props.limits.timestampPeriod));
-    }
     return true;
 }
 

@@ -202,6 +202,7 @@ bool VulkanDevice::createSwapchain(uint32_t width, uint32_t height) {
             t.desc.usage = TextureUsage::ColorTarget | TextureUsage::CopyDst;
             if (usage & VK_IMAGE_USAGE_TRANSFER_SRC_BIT) t.desc.usage |= TextureUsage::CopySrc;
             t.desc.debugName = name;
+            t.states = detail::SubresourceStates(t.desc);
             h = m_textures.insert(t);
             if (!h) {
                 logError("too many live textures for the swapchain images");
@@ -289,7 +290,7 @@ TextureHandle VulkanDevice::acquireBackbuffer() {
         sc.acquireCursor = (slot + 1) % uint32_t(sc.acquireSemaphores.size());
         sc.currentImage = int32_t(index);
         TextureRes* t = m_textures.get(sc.handles[index]);
-        t->state = Access::None;
+        t->states.setAll(Access::None);
         return sc.handles[index];
     }
     logError("acquireBackbuffer: the swapchain stays out of date");
@@ -309,16 +310,16 @@ bool VulkanDevice::present() {
     const uint32_t index = uint32_t(sc.currentImage);
     sc.currentImage = -1;
     TextureRes* t = m_textures.get(sc.handles[index]);
-    if (t->state != Access::Present)
-        logError("present: the backbuffer is in state " + toString(t->state) +
+    if (t->states.get(0, 0) != Access::Present)
+        logError("present: the backbuffer is in state " + toString(t->states.get(0, 0)) +
                  ", not Present; transition it with a barrier before present()");
 
     std::vector<VkCommandBuffer> cbs;
-    if (sc.blit || t->state != Access::Present) {
+    if (sc.blit || t->states.get(0, 0) != Access::Present) {
         VkCommandBuffer cmd = beginInternalCommands();
         if (!cmd) return false;
         if (sc.blit) {
-            recordImageBarrier(cmd, *t, t->state, Access::CopySrc, true);
+            recordImageBarrier(cmd, *t, t->states.get(0, 0), Access::CopySrc, true);
             auto ib = vkInit<VkImageMemoryBarrier2>(VK_STRUCTURE_TYPE_IMAGE_MEMORY_BARRIER_2);
             ib.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
             ib.dstStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
@@ -350,7 +351,7 @@ bool VulkanDevice::present() {
             ib.newLayout = VK_IMAGE_LAYOUT_PRESENT_SRC_KHR;
             vkCmdPipelineBarrier2(cmd, &dep);
         } else {
-            recordImageBarrier(cmd, *t, t->state, Access::Present, true);
+            recordImageBarrier(cmd, *t, t->states.get(0, 0), Access::Present, true);
         }
         if (!check(vkEndCommandBuffer(cmd), "vkEndCommandBuffer(present)")) {
             m_freeCommandBuffers.push_back(cmd);

@@ -212,6 +212,59 @@ TEST_P(ConformanceQueries, TimestampsIncrease) {
                 double(ns[kStamps - 1] - ns[0]) * 1e-6);
 }
 
+// tryReadTimestamps never waits: false while a query has no result, the values once it has, and
+// only readTimestamps counts as a blocking read in Device::stats().
+TEST_P(ConformanceQueries, TryReadTimestampsDoesNotBlock) {
+    constexpr uint32_t kElements = 16384;
+    BufferHandle data = makeBuffer(kElements * 4, BufferUsage::Storage | BufferUsage::CopyDst);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_busy::compute());
+    QueryPoolHandle pool = makeQueryPool(2);
+    ASSERT_TRUE(data.isValid() && pipeline.isValid() && pool.isValid());
+    BindGroupHandle group = makeBindGroup(pipeline, 0, {BindGroupEntry::makeBuffer(0, data)});
+    ASSERT_TRUE(group.isValid());
+    const uint64_t blockingBefore = dev().stats().blockingTimestampReads;
+
+    CommandList& reset = dev().beginCommandList("reset only");
+    reset.resetQueries(pool, 0, 2);
+    submitAndWait(reset);
+    uint64_t ns[2] = {7, 7};
+    // Metric: reset but never written queries are not available; outNs untouched. Threshold: exact.
+    EXPECT_FALSE(dev().tryReadTimestamps(pool, 0, 2, ns));
+    EXPECT_EQ(ns[0], 7u);
+    EXPECT_EQ(ns[1], 7u);
+
+    const uint32_t iterations = 64;
+    CommandList& cmd = dev().beginCommandList("timestamps");
+    cmd.fillBuffer(data, 0, kElements * 4, 1);
+    cmd.barrier(Barrier::buf(data, Access::CopyDst, Access::ShaderRead | Access::ShaderWrite));
+    cmd.bindPipeline(pipeline);
+    cmd.bindGroup(0, group);
+    cmd.pushConstants(&iterations, sizeof(iterations));
+    cmd.writeTimestamp(pool, 0);
+    cmd.dispatch(kElements / 64);
+    cmd.writeTimestamp(pool, 1);
+    const uint64_t serial = dev().submit(cmd);
+    // Polling while the GPU runs must not block; once the submission completed, the results are there.
+    int polls = 0;
+    while (!dev().tryReadTimestamps(pool, 0, 2, ns) && polls < 1000000) {
+        ++polls;
+        if (polls == 1000) dev().waitForSubmission(serial);
+    }
+    // Metric: results became available. Threshold: within the poll budget.
+    ASSERT_LT(polls, 1000000) << "timestamps never became available";
+    // Metric: ordered timestamps. Threshold: non-decreasing.
+    EXPECT_GE(ns[1], ns[0]);
+    // Metric: no blocking reads counted so far. Threshold: exact.
+    EXPECT_EQ(dev().stats().blockingTimestampReads, blockingBefore);
+
+    uint64_t blocking[2] = {};
+    ASSERT_TRUE(dev().readTimestamps(pool, 0, 2, blocking));
+    // Metric: both reads give the same values; one blocking read counted. Threshold: exact.
+    EXPECT_EQ(blocking[0], ns[0]);
+    EXPECT_EQ(blocking[1], ns[1]);
+    EXPECT_EQ(dev().stats().blockingTimestampReads, blockingBefore + 1);
+}
+
 INSTANTIATE_TEST_SUITE_P(Backends, ConformanceCompute, testing::ValuesIn(penumbra::test::gpuBackends()),
                          penumbra::test::backendName);
 INSTANTIATE_TEST_SUITE_P(Backends, ConformanceQueries, testing::ValuesIn(penumbra::test::gpuBackends()),

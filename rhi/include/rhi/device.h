@@ -105,8 +105,19 @@ public:
     virtual bool readTexture(TextureHandle src, TextureSubresource sub, Access currentAccess,
                              std::vector<uint8_t>& out) = 0;
     // Timestamps in nanoseconds (period already applied), waits for them to be available.
+    // Counted in stats().blockingTimestampReads.
     // VK: vkGetQueryPoolResults(WAIT | 64_BIT)   GL: glGetQueryObjectui64v(GL_QUERY_RESULT)
     virtual bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) = 0;
+    // Non-blocking: if every query of the range has a result (its command list was submitted and
+    // has executed past it), writes them as readTimestamps does and returns true; otherwise returns
+    // false at once and leaves outNs untouched (misuse such as a bad range is also logged).
+    // VK: vkGetQueryPoolResults(64_BIT | WITH_AVAILABILITY) without WAIT
+    // GL: glGetQueryObjectui64v(GL_QUERY_RESULT_AVAILABLE), then GL_QUERY_RESULT
+    virtual bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) = 0;
+
+    // --- statistics ------------------------------------------------------------------------------
+    // Counters since creation (VK and GL: kept by the backend; the validation wrapper forwards).
+    virtual DeviceStats stats() const = 0;
 
     // --- presentation (windowed devices only) ------------------------------------------------------
     // Returns the texture to render into this frame (ColorTarget-capable, format backbufferFormat()).

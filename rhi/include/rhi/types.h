@@ -139,10 +139,10 @@ enum class Access : uint32_t {
 };
 RHI_ENUM_FLAGS(Access)
 std::string toString(Access a);
-constexpr bool isWriteAccess(Access a) {
-    return any(a & (Access::ShaderWrite | Access::ColorTarget | Access::DepthTargetWrite |
-                    Access::CopyDst | Access::HostWrite));
-}
+// Every access that writes.
+inline constexpr Access kWriteAccesses =
+    Access::ShaderWrite | Access::ColorTarget | Access::DepthTargetWrite | Access::CopyDst | Access::HostWrite;
+constexpr bool isWriteAccess(Access a) { return any(a & kWriteAccesses); }
 
 // ---------------------------------------------------------------------------------------------
 // Buffers
@@ -493,6 +493,14 @@ struct DeviceLimits {
     double timestampPeriodNs = 1.0;  // nanoseconds per timestamp tick (already applied by readTimestamps)
     bool timestamps = false;
     bool conservativeDepth = false;
+};
+
+// What a device has done since it was created (Device::stats()), for tests and tools: creations
+// that should not happen every frame, and blocking waits that should not happen inside a frame loop.
+struct DeviceStats {
+    uint64_t pipelinesCreated = 0;        // compute and graphics pipelines
+    uint64_t bindGroupsCreated = 0;
+    uint64_t blockingTimestampReads = 0;  // readTimestamps calls: each waits for the GPU
 };
 
 struct DeviceInfo {
