@@ -32,6 +32,100 @@ inline bool resolveRange(const TextureDesc& desc, TextureRange in, TextureRange&
     return true;
 }
 
+// Replaces zero extents of `in` by the rest of the mip. False (with the reason in `why`) if the
+// mip or layer does not exist or the box leaves the subresource.
+inline bool resolveRegion(const TextureDesc& desc, const TextureRegion& in, TextureRegion& out,
+                          std::string& why) {
+    if (in.mip >= desc.mipLevels) {
+        why =
+            "mip " + std::to_string(in.mip) + " out of range (" + std::to_string(desc.mipLevels) + " levels)";
+        return false;
+    }
+    if (in.layer >= stateLayers(desc)) {
+        why = "layer " + std::to_string(in.layer) + " out of range (" + std::to_string(stateLayers(desc)) +
+              " layers)";
+        return false;
+    }
+    auto extent = [&](uint32_t base) { return std::max(1u, in.mip >= 32 ? 1u : base >> in.mip); };
+    const uint32_t w = extent(desc.width), h = extent(desc.height);
+    const uint32_t d = desc.dimension == TextureDimension::Tex3D ? extent(desc.depthOrLayers) : 1u;
+    out = in;
+    out.width = in.width ? in.width : (in.x < w ? w - in.x : 0);
+    out.height = in.height ? in.height : (in.y < h ? h - in.y : 0);
+    out.depth = in.depth ? in.depth : (in.z < d ? d - in.z : 0);
+    if (in.x >= w || in.y >= h || in.z >= d || out.width > w - in.x || out.height > h - in.y ||
+        out.depth > d - in.z) {
+        why = "region at (" + std::to_string(in.x) + ", " + std::to_string(in.y) + ", " +
+              std::to_string(in.z) + ") of " + std::to_string(out.width) + "x" + std::to_string(out.height) +
+              "x" + std::to_string(out.depth) + " leaves mip " + std::to_string(in.mip) + " (" +
+              std::to_string(w) + "x" + std::to_string(h) + "x" + std::to_string(d) + ")";
+        return false;
+    }
+    return true;
+}
+
+// Tightly packed byte size of a resolved region.
+inline uint64_t regionBytes(const TextureDesc& desc, const TextureRegion& r) {
+    return uint64_t(r.width) * r.height * r.depth * formatInfo(desc.format).bytesPerTexel;
+}
+
+// The checks every backend applies to CommandList::copyTexture: both regions resolve, the formats
+// match, the extents match and a copy inside one subresource does not overlap itself. On success
+// `src` and `dst` hold the resolved regions (dst with the source extent).
+inline bool checkTextureCopy(const TextureDesc& s, const TextureRegion& srcIn, const TextureDesc& d,
+                             const TextureRegion& dstIn, bool sameTexture, TextureRegion& src,
+                             TextureRegion& dst, std::string& why) {
+    if (!resolveRegion(s, srcIn, src, why)) {
+        why = "source " + why;
+        return false;
+    }
+    TextureRegion dstBox = dstIn;
+    if (!dstBox.width) dstBox.width = src.width;
+    if (!dstBox.height) dstBox.height = src.height;
+    if (!dstBox.depth) dstBox.depth = src.depth;
+    if (!resolveRegion(d, dstBox, dst, why)) {
+        why = "destination " + why;
+        return false;
+    }
+    if (s.format != d.format) {
+        why = std::string("formats differ (") + formatInfo(s.format).name + " -> " +
+              formatInfo(d.format).name + ")";
+        return false;
+    }
+    if (dst.width != src.width || dst.height != src.height || dst.depth != src.depth) {
+        why = "the destination extent differs from the source extent";
+        return false;
+    }
+    const bool overlap = sameTexture && src.mip == dst.mip && src.layer == dst.layer &&
+                         src.x < dst.x + dst.width && dst.x < src.x + src.width &&
+                         src.y < dst.y + dst.height && dst.y < src.y + src.height &&
+                         src.z < dst.z + dst.depth && dst.z < src.z + src.depth;
+    if (overlap) {
+        why = "source and destination boxes overlap in one subresource";
+        return false;
+    }
+    return true;
+}
+
+// The checks of CommandList::copyBufferToTexture: the region resolves, the offset is a multiple
+// of the texel size and the tightly packed texels lie inside the buffer.
+inline bool checkBufferToTexture(uint64_t bufferSize, uint64_t offset, const TextureDesc& d,
+                                 const TextureRegion& in, TextureRegion& out, std::string& why) {
+    if (!resolveRegion(d, in, out, why)) return false;
+    const uint64_t texel = formatInfo(d.format).bytesPerTexel, bytes = regionBytes(d, out);
+    if (offset % texel != 0) {
+        why = "source offset " + std::to_string(offset) + " is not a multiple of the texel size " +
+              std::to_string(texel);
+        return false;
+    }
+    if (offset > bufferSize || bytes > bufferSize - offset) {
+        why = std::to_string(bytes) + " bytes at offset " + std::to_string(offset) + " exceed the buffer's " +
+              std::to_string(bufferSize) + " bytes";
+        return false;
+    }
+    return true;
+}
+
 // "mips 1..2, layers 0..5" / "mip 1, layer 0"; for messages.
 inline std::string describeRange(const TextureRange& r) {
     auto span = [](const char* one, const char* many, uint32_t base, uint32_t count) {

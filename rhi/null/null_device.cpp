@@ -33,6 +33,30 @@ struct NullTexture {
     size_t index(TextureSubresource sub) const {
         return size_t(sub.mip) * detail::resutil::arrayLayers(desc) + sub.layer;
     }
+    // Bytes of one row and one slice of a mip, and where a resolved box starts in its subresource.
+    size_t rowPitch(uint32_t mip) const {
+        return size_t(detail::resutil::mipExtent(desc.width, mip)) * formatInfo(desc.format).bytesPerTexel;
+    }
+    size_t slicePitch(uint32_t mip) const {
+        return rowPitch(mip) * detail::resutil::mipExtent(desc.height, mip);
+    }
+    uint8_t* boxStart(const TextureRegion& b) {
+        return subresources[index({b.mip, b.layer})].data() + b.z * slicePitch(b.mip) +
+               b.y * rowPitch(b.mip) + size_t(b.x) * formatInfo(desc.format).bytesPerTexel;
+    }
+    // Copies a box of rows x slices rows of rowBytes between two pitched layouts.
+    static void copyBox(const uint8_t* src, size_t srcRow, size_t srcSlice, uint8_t* dst, size_t dstRow,
+                        size_t dstSlice, size_t rowBytes, uint32_t rows, uint32_t slices) {
+        for (uint32_t z = 0; z < slices; ++z)
+            for (uint32_t y = 0; y < rows; ++y)
+                std::memmove(dst + z * dstSlice + y * dstRow, src + z * srcSlice + y * srcRow, rowBytes);
+    }
+    // Writes tightly packed texels into a resolved box.
+    void writeBox(const TextureRegion& b, const uint8_t* packed) {
+        const size_t row = size_t(b.width) * formatInfo(desc.format).bytesPerTexel;
+        copyBox(packed, row, row * b.height, boxStart(b), rowPitch(b.mip), slicePitch(b.mip), row, b.height,
+                b.depth);
+    }
 };
 
 struct NullSampler {
@@ -71,6 +95,10 @@ struct Command {
     uint64_t size = 0;
     uint32_t value = 0;
     std::vector<uint8_t> bytes;
+    std::shared_ptr<NullTexture> dstTexture;
+    std::shared_ptr<NullTexture> srcTexture;
+    TextureRegion dstBox;
+    TextureRegion srcBox;
 };
 
 class NullDevice;
@@ -84,6 +112,10 @@ public:
     void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
                     uint64_t size) override;
     void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
+    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                     const TextureRegion& dstRegion) override;
+    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                             const TextureRegion& dstRegion) override;
     void bindPipeline(PipelineHandle pipeline) override;
     void bindGroup(uint32_t set, BindGroupHandle group) override;
     void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
@@ -367,21 +399,30 @@ public:
     }
 
     void writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) override {
-        NullTexture* t = findTexture(dst, "writeTexture");
+        writeTextureImpl(dst, TextureRegion{sub.mip, sub.layer}, data, size, "writeTexture");
+    }
+    void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                            uint64_t size) override {
+        writeTextureImpl(dst, region, data, size, "writeTextureRegion");
+    }
+    void writeTextureImpl(TextureHandle dst, const TextureRegion& in, const void* data, uint64_t size,
+                          const char* fn) {
+        NullTexture* t = findTexture(dst, fn);
         if (!t) return;
-        if (!detail::resutil::subresourceExists(t->desc, sub)) {
-            error("writeTexture: texture '" + t->desc.debugName + "' has no mip " + std::to_string(sub.mip) +
-                  " layer " + std::to_string(sub.layer));
+        TextureRegion box;
+        std::string why;
+        if (!detail::resolveRegion(t->desc, in, box, why)) {
+            error(std::string(fn) + ": texture '" + t->desc.debugName + "': " + why);
             return;
         }
-        std::vector<uint8_t>& bytes = t->subresources[t->index(sub)];
-        if (size != bytes.size() || !data) {
-            error("writeTexture: texture '" + t->desc.debugName + "' mip " + std::to_string(sub.mip) +
-                  " needs " + std::to_string(bytes.size()) + " bytes of data, got " + std::to_string(size) +
+        const uint64_t expected = detail::regionBytes(t->desc, box);
+        if (size != expected || !data) {
+            error(std::string(fn) + ": texture '" + t->desc.debugName + "' mip " + std::to_string(box.mip) +
+                  " needs " + std::to_string(expected) + " bytes of data, got " + std::to_string(size) +
                   (data ? "" : " (null pointer)"));
             return;
         }
-        std::memcpy(bytes.data(), data, bytes.size());
+        t->writeBox(box, static_cast<const uint8_t*>(data));
     }
 
     void* mappedPointer(BufferHandle h) override {
@@ -507,6 +548,14 @@ public:
         detail::logMessage(m_log, LogSeverity::Error, "null: " + message);
     }
 
+    std::shared_ptr<NullTexture> textureRef(TextureHandle h, const char* fn) {
+        auto* t = m_textures.get(h);
+        if (!t) {
+            error(std::string(fn) + ": " + (h ? "stale or foreign" : "invalid (null)") + " texture handle");
+            return nullptr;
+        }
+        return *t;
+    }
     std::shared_ptr<NullBuffer> bufferRef(BufferHandle h, const char* fn) {
         auto* b = m_buffers.get(h);
         if (!b) {
@@ -607,6 +656,18 @@ private:
             case K::FillBuffer:
                 for (uint64_t i = 0; i < c.size; i += 4)
                     std::memcpy(c.dst->bytes.data() + c.dstOffset + i, &c.value, 4);
+                break;
+            case K::CopyTexture: {
+                const TextureRegion& a = c.srcBox;
+                const size_t row = size_t(a.width) * formatInfo(c.srcTexture->desc.format).bytesPerTexel;
+                NullTexture::copyBox(c.srcTexture->boxStart(a), c.srcTexture->rowPitch(a.mip),
+                                     c.srcTexture->slicePitch(a.mip), c.dstTexture->boxStart(c.dstBox),
+                                     c.dstTexture->rowPitch(c.dstBox.mip),
+                                     c.dstTexture->slicePitch(c.dstBox.mip), row, a.height, a.depth);
+                break;
+            }
+            case K::CopyBufferToTexture:
+                c.dstTexture->writeBox(c.dstBox, c.src->bytes.data() + c.srcOffset);
                 break;
             case K::ResetQueries:
                 for (uint32_t i = 0; i < c.rec.counts[1]; ++i) {
@@ -712,6 +773,42 @@ void NullCommandList::copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHan
     c.srcOffset = srcOffset;
     c.dstOffset = dstOffset;
     c.size = size;
+}
+
+void NullCommandList::copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                                  const TextureRegion& dstRegion) {
+    auto s = m_device.textureRef(src, "copyTexture");
+    auto d = s ? m_device.textureRef(dst, "copyTexture") : nullptr;
+    if (!s || !d) return;
+    TextureRegion a, b;
+    std::string why;
+    if (!detail::checkTextureCopy(s->desc, srcRegion, d->desc, dstRegion, s == d, a, b, why)) {
+        m_device.error("copyTexture: " + why);
+        return;
+    }
+    Command& c = add(RecordedCommand::Kind::CopyTexture);
+    c.srcTexture = std::move(s);
+    c.dstTexture = std::move(d);
+    c.srcBox = a;
+    c.dstBox = b;
+}
+
+void NullCommandList::copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                                          const TextureRegion& dstRegion) {
+    auto s = m_device.bufferRef(src, "copyBufferToTexture");
+    auto d = s ? m_device.textureRef(dst, "copyBufferToTexture") : nullptr;
+    if (!s || !d) return;
+    TextureRegion box;
+    std::string why;
+    if (!detail::checkBufferToTexture(s->desc.size, srcOffset, d->desc, dstRegion, box, why)) {
+        m_device.error("copyBufferToTexture: " + why);
+        return;
+    }
+    Command& c = add(RecordedCommand::Kind::CopyBufferToTexture);
+    c.src = std::move(s);
+    c.srcOffset = srcOffset;
+    c.dstTexture = std::move(d);
+    c.dstBox = box;
 }
 
 void NullCommandList::fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) {

@@ -17,6 +17,8 @@ struct RecordedCommand {
         UpdateBuffer,
         CopyBuffer,
         FillBuffer,
+        CopyTexture,
+        CopyBufferToTexture,
         BindPipeline,
         BindGroup,
         PushConstants,
@@ -37,13 +39,13 @@ struct RecordedCommand {
         PopDebugGroup,
     };
     Kind kind;
-    std::vector<rhi::Barrier> barriers;  // Kind::Barrier
-    std::string label;                   // PushDebugGroup name, BeginRenderPass debugName
-    PipelineHandle pipeline;             // BindPipeline
-    BindGroupHandle group;               // BindGroup
-    uint32_t set = 0;                    // BindGroup
+    std::vector<rhi::Barrier> barriers;      // Kind::Barrier
+    std::string label;                       // PushDebugGroup name, BeginRenderPass debugName
+    PipelineHandle pipeline;                 // BindPipeline
+    BindGroupHandle group;                   // BindGroup
+    uint32_t set = 0;                        // BindGroup
     std::vector<TextureHandle> attachments;  // BeginRenderPass: colour targets then depth (if any)
-    uint32_t counts[3] = {0, 0, 0};      // Dispatch groups / Draw vertex,instance / query index
+    uint32_t counts[3] = {0, 0, 0};          // Dispatch groups / Draw vertex,instance / query index
 };
 
 // Commands of every list submitted to `device` so far, in submission order. `device` must be a

@@ -154,6 +154,47 @@ void GlCommandList::fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size,
     });
 }
 
+void GlCommandList::copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                                const TextureRegion& dstRegion) {
+    TextureObj* s = m_device.texture(src, "copyTexture (source)");
+    TextureObj* t = m_device.texture(dst, "copyTexture (destination)");
+    if (!s || !t) return;
+    TextureRegion a, b;
+    std::string why;
+    if (!detail::checkTextureCopy(s->desc, srcRegion, t->desc, dstRegion, s == t, a, b, why)) {
+        error("copyTexture " + quoted(s->desc.debugName) + " -> " + quoted(t->desc.debugName) + ": " + why);
+        return;
+    }
+    m_commands.push_back([sn = s->name, st = s->target, tn = t->name, tt = t->target, a, b](GlDevice& d) {
+        d.flushBarriers();
+        // z is the array layer for Tex2DArray (a.z and b.z are 0 there).
+        d.m_gl.CopyImageSubData(sn, st, GLint(a.mip), GLint(a.x), GLint(a.y), GLint(a.z + a.layer), tn, tt,
+                                GLint(b.mip), GLint(b.x), GLint(b.y), GLint(b.z + b.layer), GLsizei(a.width),
+                                GLsizei(a.height), GLsizei(a.depth));
+    });
+}
+
+void GlCommandList::copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                                        const TextureRegion& dstRegion) {
+    BufferObj* s = m_device.buffer(src, "copyBufferToTexture (source)");
+    TextureObj* t = m_device.texture(dst, "copyBufferToTexture (destination)");
+    if (!s || !t) return;
+    TextureRegion box;
+    std::string why;
+    if (!detail::checkBufferToTexture(s->desc.size, srcOffset, t->desc, dstRegion, box, why)) {
+        error("copyBufferToTexture " + quoted(s->desc.debugName) + " -> " + quoted(t->desc.debugName) + ": " +
+              why);
+        return;
+    }
+    // GL names stay valid until the submission completes (deferred destruction): copy what replay needs.
+    m_commands.push_back([tex = *t, buffer = s->name, srcOffset, box](GlDevice& d) {
+        d.flushBarriers();
+        d.m_gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, buffer);
+        d.uploadRegion(tex, box, reinterpret_cast<const void*>(uintptr_t(srcOffset)));
+        d.m_gl.BindBuffer(GL_PIXEL_UNPACK_BUFFER, 0);
+    });
+}
+
 void GlCommandList::bindPipeline(PipelineHandle pipeline) {
     auto* p = m_device.m_pipelines.get(pipeline);
     if (!p) {

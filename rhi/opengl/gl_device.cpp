@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rhi/common/backend_factories.h"
+#include "rhi/common/subresource_states.h"
 
 namespace rhi::gl {
 
@@ -957,34 +958,43 @@ void GlDevice::writeBuffer(BufferHandle dst, uint64_t offset, const void* data, 
 }
 
 void GlDevice::writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) {
+    writeTextureImpl(dst, TextureRegion{sub.mip, sub.layer}, data, size, "writeTexture");
+}
+
+void GlDevice::writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                                  uint64_t size) {
+    writeTextureImpl(dst, region, data, size, "writeTextureRegion");
+}
+
+void GlDevice::writeTextureImpl(TextureHandle dst, const TextureRegion& in, const void* data, uint64_t size,
+                                const char* fn) {
     if (!activate()) return;
-    TextureObj* t = texture(dst, "writeTexture");
+    TextureObj* t = texture(dst, fn);
     if (!t) return;
-    const TextureDesc& d = t->desc;
-    const std::string what = "writeTexture " + quoted(d.debugName);
-    if (sub.mip >= d.mipLevels) {
-        error(what + ": mip " + std::to_string(sub.mip) + " is out of range");
+    const std::string what = std::string(fn) + " " + quoted(t->desc.debugName);
+    TextureRegion box;
+    std::string why;
+    if (!detail::resolveRegion(t->desc, in, box, why)) {
+        error(what + ": " + why);
         return;
     }
-    const bool isArray = d.dimension == TextureDimension::Tex2DArray;
-    if ((isArray && sub.layer >= d.depthOrLayers) || (!isArray && sub.layer != 0)) {
-        error(what + ": layer " + std::to_string(sub.layer) + " is out of range");
-        return;
-    }
-    const uint32_t w = mipExtent(d.width, sub.mip), h = mipExtent(d.height, sub.mip);
-    const uint32_t depth = d.dimension == TextureDimension::Tex3D ? mipExtent(d.depthOrLayers, sub.mip) : 1;
-    const uint64_t expected = uint64_t(w) * h * depth * formatInfo(d.format).bytesPerTexel;
+    const uint64_t expected = detail::regionBytes(t->desc, box);
     if (!data || size < expected) {
         error(what + ": " + std::to_string(size) + " bytes given, " + std::to_string(expected) + " needed");
         return;
     }
     flushBarriers();
-    if (d.dimension == TextureDimension::Tex2D)
-        m_gl.TextureSubImage2D(t->name, GLint(sub.mip), 0, 0, GLsizei(w), GLsizei(h), t->format.pixelFormat,
-                               t->format.pixelType, data);
-    else
-        m_gl.TextureSubImage3D(t->name, GLint(sub.mip), 0, 0, GLint(isArray ? sub.layer : 0), GLsizei(w),
-                               GLsizei(h), GLsizei(depth), t->format.pixelFormat, t->format.pixelType, data);
+    uploadRegion(*t, box, data);
+}
+
+void GlDevice::uploadRegion(const TextureObj& t, const TextureRegion& box, const void* pixels) {
+    if (t.desc.dimension == TextureDimension::Tex2D)
+        m_gl.TextureSubImage2D(t.name, GLint(box.mip), GLint(box.x), GLint(box.y), GLsizei(box.width),
+                               GLsizei(box.height), t.format.pixelFormat, t.format.pixelType, pixels);
+    else  // z is the array layer for Tex2DArray
+        m_gl.TextureSubImage3D(t.name, GLint(box.mip), GLint(box.x), GLint(box.y), GLint(box.z + box.layer),
+                               GLsizei(box.width), GLsizei(box.height), GLsizei(box.depth),
+                               t.format.pixelFormat, t.format.pixelType, pixels);
 }
 
 void* GlDevice::mappedPointer(BufferHandle h) {

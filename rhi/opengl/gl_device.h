@@ -143,6 +143,10 @@ public:
     void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
                     uint64_t size) override;
     void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
+    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                     const TextureRegion& dstRegion) override;
+    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                             const TextureRegion& dstRegion) override;
     void bindPipeline(PipelineHandle pipeline) override;
     void bindGroup(uint32_t set, BindGroupHandle group) override;
     void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
@@ -225,6 +229,8 @@ public:
 
     void writeBuffer(BufferHandle dst, uint64_t offset, const void* data, uint64_t size) override;
     void writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) override;
+    void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                            uint64_t size) override;
     void* mappedPointer(BufferHandle h) override;
 
     CommandList& beginCommandList(std::string_view debugName) override;
@@ -266,6 +272,11 @@ private:
     bool mergeLayout(std::vector<BindingSlot>& layout, const ShaderObj& shader,
                      const std::string& pipelineName);
     bool createBackbuffer(uint32_t width, uint32_t height);
+    void writeTextureImpl(TextureHandle dst, const TextureRegion& region, const void* data, uint64_t size,
+                          const char* fn);
+    // glTextureSubImage{2D,3D} of a resolved region from `pixels` (a pointer, or an offset into the
+    // bound GL_PIXEL_UNPACK_BUFFER).
+    void uploadRegion(const TextureObj& t, const TextureRegion& box, const void* pixels);
     bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs, bool wait,
                             const char* fn);
 

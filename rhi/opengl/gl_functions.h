@@ -119,6 +119,13 @@ namespace rhi::gl {
     X(PFNGLDRAWARRAYSINSTANCEDBASEINSTANCEPROC, DrawArraysInstancedBaseInstance)                         \
     X(PFNGLDRAWELEMENTSINSTANCEDBASEVERTEXBASEINSTANCEPROC, DrawElementsInstancedBaseVertexBaseInstance) \
     X(PFNGLMULTIDRAWARRAYSINDIRECTPROC, MultiDrawArraysIndirect)                                         \
+    X(PFNGLMULTIDRAWELEMENTSINDIRECTPROC, MultiDrawElementsIndirect)                                     \
+    /* copies, views and capabilities */                                                                 \
+    X(PFNGLCOPYIMAGESUBDATAPROC, CopyImageSubData)                                                       \
+    X(PFNGLGENTEXTURESPROC, GenTextures)                                                                 \
+    X(PFNGLTEXTUREVIEWPROC, TextureView)                                                                 \
+    X(PFNGLGETINTERNALFORMATIVPROC, GetInternalformativ)                                                 \
+    X(PFNGLGETSTRINGIPROC, GetStringi)                                                                   \
     /* synchronisation and queries */                                                                    \
     X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)                                                             \
     X(PFNGLFENCESYNCPROC, FenceSync)                                                                     \

@@ -148,6 +148,10 @@ public:
     void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
                     uint64_t size) override;
     void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
+    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                     const TextureRegion& dstRegion) override;
+    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                             const TextureRegion& dstRegion) override;
     void bindPipeline(PipelineHandle pipeline) override;
     void bindGroup(uint32_t set, BindGroupHandle group) override;
     void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
@@ -613,6 +617,30 @@ public:
             return;
         }
         m_inner->writeTexture(dst, sub, data, size);
+        t->states.setAll(Access::ShaderSampled);
+    }
+
+    void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                            uint64_t size) override {
+        const char* fn = "writeTextureRegion";
+        TextureInfo* t = texture(dst, fn, "dst");
+        if (!t) return;
+        TextureRegion box;
+        std::string why;
+        if (!resolveRegion(t->desc, region, box, why)) {
+            report(fn, "texture " + quoted(t->desc.debugName) + ": " + why);
+            return;
+        }
+        const uint64_t expected = regionBytes(t->desc, box);
+        if (size != expected || !data) {
+            report(fn, "texture " + quoted(t->desc.debugName) + " region of " + std::to_string(box.width) +
+                           "x" + std::to_string(box.height) + "x" + std::to_string(box.depth) +
+                           " needs exactly " + std::to_string(expected) +
+                           " bytes of tightly packed texels, got " + std::to_string(size) +
+                           (data ? "" : " (null pointer)"));
+            return;
+        }
+        m_inner->writeTextureRegion(dst, region, data, size);
         t->states.setAll(Access::ShaderSampled);
     }
 
@@ -1085,6 +1113,61 @@ void ValidationCommandList::fillBuffer(BufferHandle dst, uint64_t offset, uint64
     }
     m_device.useBuffer(fn, *b, "", "is a copy destination", Access::CopyDst, Access::CopyDst, true);
     m_inner.fillBuffer(dst, offset, size, value);
+}
+
+void ValidationCommandList::copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                                        const TextureRegion& dstRegion) {
+    const char* fn = "copyTexture";
+    TextureInfo* s = m_device.texture(src, fn, "src");
+    TextureInfo* d = s ? m_device.texture(dst, fn, "dst") : nullptr;
+    if (!s || !d) return;
+    if (!any(s->desc.usage & TextureUsage::CopySrc) || !any(d->desc.usage & TextureUsage::CopyDst)) {
+        m_device.report(fn, "texture " + quoted(s->desc.debugName) + " needs CopySrc usage and texture " +
+                                quoted(d->desc.debugName) + " CopyDst usage");
+        return;
+    }
+    TextureRegion a, b;
+    std::string why;
+    if (!checkTextureCopy(s->desc, srcRegion, d->desc, dstRegion, s == d, a, b, why)) {
+        m_device.report(fn, quoted(s->desc.debugName) + " -> " + quoted(d->desc.debugName) + ": " + why);
+        return;
+    }
+    if (m_inPass) {
+        m_device.report(fn, "transfers are not allowed inside a render pass");
+        return;
+    }
+    m_device.useTexture(fn, *s, TextureRange{a.mip, 1, a.layer, 1}, " (src)", "is a copy source",
+                        Access::CopySrc, Access::CopySrc);
+    m_device.useTexture(fn, *d, TextureRange{b.mip, 1, b.layer, 1}, " (dst)", "is a copy destination",
+                        Access::CopyDst, Access::CopyDst);
+    m_inner.copyTexture(src, srcRegion, dst, dstRegion);
+}
+
+void ValidationCommandList::copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                                                const TextureRegion& dstRegion) {
+    const char* fn = "copyBufferToTexture";
+    BufferInfo* s = m_device.buffer(src, fn, "src");
+    TextureInfo* d = s ? m_device.texture(dst, fn, "dst") : nullptr;
+    if (!s || !d) return;
+    if (!any(s->desc.usage & BufferUsage::CopySrc) || !any(d->desc.usage & TextureUsage::CopyDst)) {
+        m_device.report(fn, "buffer " + quoted(s->desc.debugName) + " needs CopySrc usage and texture " +
+                                quoted(d->desc.debugName) + " CopyDst usage");
+        return;
+    }
+    TextureRegion box;
+    std::string why;
+    if (!checkBufferToTexture(s->desc.size, srcOffset, d->desc, dstRegion, box, why)) {
+        m_device.report(fn, quoted(s->desc.debugName) + " -> " + quoted(d->desc.debugName) + ": " + why);
+        return;
+    }
+    if (m_inPass) {
+        m_device.report(fn, "transfers are not allowed inside a render pass");
+        return;
+    }
+    m_device.useBuffer(fn, *s, " (src)", "is a copy source", Access::CopySrc, Access::CopySrc, false);
+    m_device.useTexture(fn, *d, TextureRange{box.mip, 1, box.layer, 1}, " (dst)", "is a copy destination",
+                        Access::CopyDst, Access::CopyDst);
+    m_inner.copyBufferToTexture(src, srcOffset, dst, dstRegion);
 }
 
 void ValidationCommandList::bindPipeline(PipelineHandle pipeline) {

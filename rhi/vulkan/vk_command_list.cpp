@@ -228,6 +228,52 @@ void VulkanCommandList::fillBuffer(BufferHandle dst, uint64_t offset, uint64_t s
     vkCmdFillBuffer(m_cmd, b->buffer, offset, vkSize, value);
 }
 
+void VulkanCommandList::copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                                    const TextureRegion& dstRegion) {
+    if (!checkOutsideRenderPass("copyTexture")) return;
+    TextureRes* s = m_dev.texture(src, "copyTexture (source)");
+    TextureRes* d = m_dev.texture(dst, "copyTexture (destination)");
+    if (!s || !d) return;
+    TextureRegion a, b;
+    std::string why;
+    if (!detail::checkTextureCopy(s->desc, srcRegion, d->desc, dstRegion, s == d, a, b, why)) {
+        error("copyTexture '" + s->desc.debugName + "' -> '" + d->desc.debugName + "': " + why);
+        return;
+    }
+    if (!(s->usage & VK_IMAGE_USAGE_TRANSFER_SRC_BIT) || !(d->usage & VK_IMAGE_USAGE_TRANSFER_DST_BIT)) {
+        error("copyTexture: the source needs CopySrc usage and the destination CopyDst usage");
+        return;
+    }
+    VkImageCopy region{};
+    region.srcSubresource = {s->aspect, a.mip, a.layer, 1};
+    region.srcOffset = {int32_t(a.x), int32_t(a.y), int32_t(a.z)};
+    region.dstSubresource = {d->aspect, b.mip, b.layer, 1};
+    region.dstOffset = {int32_t(b.x), int32_t(b.y), int32_t(b.z)};
+    region.extent = {a.width, a.height, a.depth};
+    vkCmdCopyImage(m_cmd, s->image, m_dev.layoutOf(*s, Access::CopySrc), d->image,
+                   m_dev.layoutOf(*d, Access::CopyDst), 1, &region);
+}
+
+void VulkanCommandList::copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                                            const TextureRegion& dstRegion) {
+    if (!checkOutsideRenderPass("copyBufferToTexture")) return;
+    BufferRes* b = m_dev.buffer(src, "copyBufferToTexture (source)");
+    TextureRes* t = m_dev.texture(dst, "copyBufferToTexture (destination)");
+    if (!b || !t) return;
+    TextureRegion box;
+    std::string why;
+    if (!detail::checkBufferToTexture(b->desc.size, srcOffset, t->desc, dstRegion, box, why)) {
+        error("copyBufferToTexture '" + b->desc.debugName + "' -> '" + t->desc.debugName + "': " + why);
+        return;
+    }
+    if (!(b->usage & VK_BUFFER_USAGE_TRANSFER_SRC_BIT) || !(t->usage & VK_IMAGE_USAGE_TRANSFER_DST_BIT)) {
+        error("copyBufferToTexture: the buffer needs CopySrc usage and the texture CopyDst usage");
+        return;
+    }
+    const VkBufferImageCopy region = imageCopyRegion(*t, box, srcOffset);
+    vkCmdCopyBufferToImage(m_cmd, b->buffer, t->image, m_dev.layoutOf(*t, Access::CopyDst), 1, &region);
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Pipelines and resources
 // ---------------------------------------------------------------------------------------------------

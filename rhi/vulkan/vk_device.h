@@ -121,6 +121,9 @@ struct QueryPoolRes {
     uint32_t count = 0;
 };
 
+// The buffer <-> image copy of a resolved region of one subresource, tightly packed at bufferOffset.
+VkBufferImageCopy imageCopyRegion(const TextureRes& t, const TextureRegion& box, VkDeviceSize bufferOffset);
+
 // --- command list -----------------------------------------------------------------------------------
 class VulkanCommandList final : public CommandList {
 public:
@@ -131,6 +134,10 @@ public:
     void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
                     uint64_t size) override;
     void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
+    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                     const TextureRegion& dstRegion) override;
+    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                             const TextureRegion& dstRegion) override;
     void bindPipeline(PipelineHandle pipeline) override;
     void bindGroup(uint32_t set, BindGroupHandle group) override;
     void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
@@ -219,6 +226,8 @@ public:
 
     void writeBuffer(BufferHandle dst, uint64_t offset, const void* data, uint64_t size) override;
     void writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) override;
+    void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                            uint64_t size) override;
     void* mappedPointer(BufferHandle h) override;
 
     CommandList& beginCommandList(std::string_view debugName) override;
@@ -311,6 +320,8 @@ private:
     bool createRawBuffer(VkDeviceSize size, VkBufferUsageFlags usage, MemoryType memory, VkBuffer& buffer,
                          Allocation& alloc, const char* what);
     void flushUploadsAndWait();
+    void writeTextureImpl(TextureHandle dst, const TextureRegion& region, const void* data, uint64_t size,
+                          const char* fn);
     bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs, bool wait,
                             const char* fn);
 

@@ -1257,18 +1257,26 @@ bool subresourceExtent(const TextureDesc& d, TextureSubresource sub, VkExtent3D&
 }  // namespace
 
 void VulkanDevice::writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) {
-    TextureRes* t = texture(dst, "writeTexture");
+    writeTextureImpl(dst, TextureRegion{sub.mip, sub.layer}, data, size, "writeTexture");
+}
+
+void VulkanDevice::writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                                      uint64_t size) {
+    writeTextureImpl(dst, region, data, size, "writeTextureRegion");
+}
+
+void VulkanDevice::writeTextureImpl(TextureHandle dst, const TextureRegion& in, const void* data,
+                                    uint64_t size, const char* fn) {
+    TextureRes* t = texture(dst, fn);
     if (!t) return;
-    const std::string what = "writeTexture('" + t->desc.debugName + "')";
-    VkExtent3D extent;
-    uint32_t layer = 0;
+    const std::string what = std::string(fn) + "('" + t->desc.debugName + "')";
+    TextureRegion box;
     std::string err;
-    if (!subresourceExtent(t->desc, sub, extent, layer, err)) {
+    if (!detail::resolveRegion(t->desc, in, box, err)) {
         logError(what + ": " + err);
         return;
     }
-    const uint64_t expected =
-        uint64_t(extent.width) * extent.height * extent.depth * formatInfo(t->desc.format).bytesPerTexel;
+    const uint64_t expected = detail::regionBytes(t->desc, box);
     if (!data || size != expected) {
         logError(what + ": expected " + std::to_string(expected) + " bytes of tightly packed texels, got " +
                  std::to_string(data ? size : 0));
@@ -1283,12 +1291,18 @@ void VulkanDevice::writeTexture(TextureHandle dst, TextureSubresource sub, const
     if (!cmd || !allocateStaging(size, s)) return;
     std::memcpy(s.ptr, data, size);
     transitionTracked(cmd, *t, Access::CopyDst);
-    VkBufferImageCopy region{};
-    region.bufferOffset = s.offset;
-    region.imageSubresource = {t->aspect, sub.mip, layer, 1};
-    region.imageExtent = extent;
+    const VkBufferImageCopy region = imageCopyRegion(*t, box, s.offset);
     vkCmdCopyBufferToImage(cmd, s.buffer, t->image, VK_IMAGE_LAYOUT_TRANSFER_DST_OPTIMAL, 1, &region);
     recordImageBarrier(cmd, *t, Access::CopyDst, Access::ShaderSampled);
+}
+
+VkBufferImageCopy imageCopyRegion(const TextureRes& t, const TextureRegion& box, VkDeviceSize bufferOffset) {
+    VkBufferImageCopy region{};
+    region.bufferOffset = bufferOffset;
+    region.imageSubresource = {t.aspect, box.mip, box.layer, 1};
+    region.imageOffset = {int32_t(box.x), int32_t(box.y), int32_t(box.z)};
+    region.imageExtent = {box.width, box.height, box.depth};
+    return region;
 }
 
 // ---------------------------------------------------------------------------------------------------

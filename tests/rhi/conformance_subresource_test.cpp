@@ -1,5 +1,7 @@
 // RHI conformance: subresources. Barriers on a mip range (a mip chain written one level at a time
-// with barriers on single mips).
+// with barriers on single mips), region writes to 2D / array / 3D textures, texture-to-texture and
+// buffer-to-texture copies with regions.
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -74,6 +76,147 @@ TEST_P(ConformanceSubresource, MipChainWithPerMipBarriers) {
     EXPECT_EQ(readTextureAs<uint32_t>(chain, {0, 0}, Access::CopySrc), level0);
     EXPECT_EQ(readTextureAs<uint32_t>(chain, {1, 0}, Access::CopySrc), level1);
     EXPECT_EQ(readTextureAs<uint32_t>(chain, {2, 0}, Access::CopySrc), level2);
+}
+
+// CPU model of one subresource of 32-bit texels (x fastest, then y, then z).
+struct Box3 {
+    uint32_t w, h, d;
+    std::vector<uint32_t> texels;
+    Box3(uint32_t w_, uint32_t h_, uint32_t d_, uint32_t seed)
+        : w(w_), h(h_), d(d_), texels(size_t(w_) * h_ * d_) {
+        Rng rng(seed);
+        for (auto& v : texels) v = rng.next();
+    }
+    uint32_t& at(uint32_t x, uint32_t y, uint32_t z) { return texels[(size_t(z) * h + y) * w + x]; }
+    // Writes `packed` (region-sized, tightly packed) at the region's offset.
+    void write(const TextureRegion& r, const std::vector<uint32_t>& packed) {
+        for (uint32_t z = 0; z < r.depth; ++z)
+            for (uint32_t y = 0; y < r.height; ++y)
+                for (uint32_t x = 0; x < r.width; ++x)
+                    at(r.x + x, r.y + y, r.z + z) = packed[(size_t(z) * r.height + y) * r.width + x];
+    }
+    std::vector<uint32_t> read(const TextureRegion& r) {
+        std::vector<uint32_t> out;
+        for (uint32_t z = 0; z < r.depth; ++z)
+            for (uint32_t y = 0; y < r.height; ++y)
+                for (uint32_t x = 0; x < r.width; ++x) out.push_back(at(r.x + x, r.y + y, r.z + z));
+        return out;
+    }
+};
+
+std::vector<uint32_t> randomWords(size_t n, uint32_t seed) {
+    std::vector<uint32_t> v(n);
+    Rng rng(seed);
+    for (auto& x : v) x = rng.next();
+    return v;
+}
+
+TextureDesc wordTexture(TextureDimension dim, uint32_t w, uint32_t h, uint32_t depthOrLayers, uint32_t mips) {
+    TextureDesc d;
+    d.dimension = dim;
+    d.format = Format::R32_UINT;
+    d.width = w;
+    d.height = h;
+    d.depthOrLayers = depthOrLayers;
+    d.mipLevels = mips;
+    d.usage = TextureUsage::Sampled | TextureUsage::CopyDst | TextureUsage::CopySrc;
+    d.debugName = "conf region texture";
+    return d;
+}
+
+// writeTextureRegion changes exactly the texels of the box (2D mip 0 and 1, one array layer, a 3D
+// sub-volume of mip 0 and 1, zero extents reaching the end of the mip) and keeps the others.
+TEST_P(ConformanceSubresource, RegionWrites2DArrayAnd3D) {
+    struct Case {
+        TextureDimension dim;
+        uint32_t w, h, d;
+        std::vector<TextureRegion> regions;
+    };
+    const Case cases[] = {
+        {TextureDimension::Tex2D, 16, 8, 1, {{0, 0, 3, 2, 0, 5, 4, 1}, {1, 0, 1, 1, 0, 0, 2, 0}}},
+        {TextureDimension::Tex2DArray, 8, 8, 3, {{0, 2, 2, 3, 0, 4, 4, 1}, {0, 0, 7, 7, 0, 1, 1, 1}}},
+        {TextureDimension::Tex3D, 8, 8, 8, {{0, 0, 2, 1, 3, 3, 4, 2}, {1, 0, 0, 1, 1, 0, 2, 0}}},
+    };
+    uint32_t seed = 1;
+    for (const Case& c : cases) {
+        const uint32_t mips = 2, layers = c.dim == TextureDimension::Tex2DArray ? c.d : 1;
+        TextureHandle t = makeTexture(wordTexture(c.dim, c.w, c.h, c.d, mips));
+        ASSERT_TRUE(t.isValid());
+        std::vector<Box3> model;  // [mip * layers + layer]
+        for (uint32_t m = 0; m < mips; ++m)
+            for (uint32_t l = 0; l < layers; ++l) {
+                const uint32_t depth = c.dim == TextureDimension::Tex3D ? std::max(1u, c.d >> m) : 1;
+                model.emplace_back(std::max(1u, c.w >> m), std::max(1u, c.h >> m), depth, ++seed);
+                dev().writeTexture(t, {m, l}, model.back().texels.data(), model.back().texels.size() * 4);
+            }
+        for (TextureRegion r : c.regions) {
+            Box3& sub = model[r.mip * layers + r.layer];
+            const TextureRegion asked = r;
+            if (!r.width) r.width = sub.w - r.x;
+            if (!r.height) r.height = sub.h - r.y;
+            if (!r.depth) r.depth = sub.d - r.z;
+            const std::vector<uint32_t> packed = randomWords(size_t(r.width) * r.height * r.depth, ++seed);
+            dev().writeTextureRegion(t, asked, packed.data(), packed.size() * 4);
+            sub.write(r, packed);
+        }
+        for (uint32_t m = 0; m < mips; ++m)
+            for (uint32_t l = 0; l < layers; ++l) {
+                // Metric: every texel of every subresource equals the CPU model. Threshold: exact.
+                EXPECT_EQ(readTextureAs<uint32_t>(t, {m, l}, Access::ShaderSampled),
+                          model[m * layers + l].texels)
+                    << "dimension " << int(c.dim) << " mip " << m << " layer " << l;
+            }
+    }
+}
+
+// copyTexture between two textures (2D -> array layer), between two mips of one texture (mip 0
+// in CopySrc, mip 1 in CopyDst at once) and copyBufferToTexture into a 3D box at a buffer offset.
+TEST_P(ConformanceSubresource, TextureAndBufferCopiesWithRegions) {
+    TextureHandle src = makeTexture(wordTexture(TextureDimension::Tex2D, 16, 16, 1, 2));
+    TextureHandle arr = makeTexture(wordTexture(TextureDimension::Tex2DArray, 8, 8, 3, 1));
+    TextureHandle vol = makeTexture(wordTexture(TextureDimension::Tex3D, 8, 4, 4, 1));
+    ASSERT_TRUE(src.isValid() && arr.isValid() && vol.isValid());
+    Box3 src0(16, 16, 1, 11), src1(8, 8, 1, 12), layer1(8, 8, 1, 13), volume(8, 4, 4, 14);
+    dev().writeTexture(src, {0, 0}, src0.texels.data(), src0.texels.size() * 4);
+    dev().writeTexture(src, {1, 0}, src1.texels.data(), src1.texels.size() * 4);
+    for (uint32_t l = 0; l < 3; ++l) {
+        Box3 other(8, 8, 1, 20 + l);
+        dev().writeTexture(arr, {0, l}, l == 1 ? layer1.texels.data() : other.texels.data(), 8 * 8 * 4);
+    }
+    dev().writeTexture(vol, {}, volume.texels.data(), volume.texels.size() * 4);
+    const uint64_t kOffset = 16;
+    const TextureRegion volBox{0, 0, 5, 1, 1, 3, 2, 3};
+    const std::vector<uint32_t> words = randomWords(kOffset / 4 + 3 * 2 * 3, 15);
+    BufferHandle staging = makeBufferFrom(words, BufferUsage::CopySrc);
+    ASSERT_TRUE(staging.isValid());
+
+    CommandList& cmd = dev().beginCommandList("region copies");
+    const Barrier before[] = {
+        Barrier::tex(src, Access::ShaderSampled, Access::CopySrc, TextureRange{0, 1}),
+        Barrier::tex(src, Access::ShaderSampled, Access::CopyDst, TextureRange{1, 1}),
+        Barrier::tex(arr, Access::ShaderSampled, Access::CopyDst, TextureRange{0, 1, 1, 1}),
+        Barrier::tex(vol, Access::ShaderSampled, Access::CopyDst)};
+    cmd.barrier(before);
+    const TextureRegion fromSrc{0, 0, 4, 4, 0, 6, 5, 1}, toLayer{0, 1, 1, 2, 0, 0, 0, 0};
+    cmd.copyTexture(src, fromSrc, arr, toLayer);
+    const TextureRegion mip0Box{0, 0, 8, 8, 0, 8, 8, 1}, mip1At{1, 0, 0, 0, 0, 0, 0, 0};
+    cmd.copyTexture(src, mip0Box, src, mip1At);
+    cmd.copyBufferToTexture(staging, kOffset, vol, volBox);
+    const Barrier after[] = {
+        Barrier::tex(src, Access::CopyDst, Access::CopySrc, TextureRange{1, 1}),
+        Barrier::tex(arr, Access::CopyDst, Access::ShaderSampled, TextureRange{0, 1, 1, 1}),
+        Barrier::tex(vol, Access::CopyDst, Access::CopySrc)};
+    cmd.barrier(after);
+    submitAndWait(cmd);
+
+    layer1.write({0, 1, 1, 2, 0, 6, 5, 1}, src0.read(fromSrc));
+    src1.write({1, 0, 0, 0, 0, 8, 8, 1}, src0.read(mip0Box));
+    volume.write(volBox, std::vector<uint32_t>(words.begin() + kOffset / 4, words.end()));
+    // Metric: the copied boxes equal their sources and every other texel kept its value. Threshold: exact.
+    EXPECT_EQ(readTextureAs<uint32_t>(arr, {0, 1}, Access::ShaderSampled), layer1.texels);
+    EXPECT_EQ(readTextureAs<uint32_t>(src, {1, 0}, Access::CopySrc), src1.texels);
+    EXPECT_EQ(readTextureAs<uint32_t>(src, {0, 0}, Access::CopySrc), src0.texels);
+    EXPECT_EQ(readTextureAs<uint32_t>(vol, {}, Access::CopySrc), volume.texels);
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ConformanceSubresource, testing::ValuesIn(penumbra::test::gpuBackends()),

@@ -899,6 +899,47 @@ TEST_F(ValidationTest, BarriersArePerSubresource) {
     expectNoNewErrors();
 }
 
+TEST_F(ValidationTest, RegionWritesAndCopiesAreChecked) {
+    // Criterion: boxes outside the subresource, wrong sizes, overlapping self-copies, format
+    // mismatches and copies from / to subresources not in CopySrc / CopyDst are each reported once.
+    const TextureUsage usage = TextureUsage::CopySrc | TextureUsage::CopyDst | TextureUsage::Sampled;
+    rhi::TextureHandle a = makeTexture("a", rhi::Format::R32_UINT, usage, 16, 2);
+    rhi::TextureHandle b = makeTexture("b", rhi::Format::RGBA8_UNORM, usage, 16, 1);
+    std::vector<uint32_t> words(64, 1);
+    dev().writeTextureRegion(a, {0, 0, 12, 0, 0, 8, 4, 1}, words.data(), 8 * 4 * 4);
+    expectExactError(
+        "validation: writeTextureRegion: texture 'a': region at (12, 0, 0) of 8x4x1 leaves mip 0 (16x16x1)");
+    dev().writeTextureRegion(a, {1, 0, 4, 4, 0, 4, 4, 1}, words.data(), 4);
+    expectExactError(
+        "validation: writeTextureRegion: texture 'a' region of 4x4x1 needs exactly 64 bytes of tightly "
+        "packed "
+        "texels, got 4");
+    dev().writeTextureRegion(a, {1, 0, 4, 4, 0, 0, 0, 0}, words.data(), 64);  // zero extent: rest of mip 1
+    expectNoNewErrors();
+
+    rhi::BufferHandle staging = makeBuffer("staging", 256);
+    rhi::CommandList& list = dev().beginCommandList();
+    list.copyTexture(a, {0, 0, 0, 0, 0, 4, 4, 1}, a, {0, 0, 2, 2, 0, 0, 0, 0});
+    expectExactError(
+        "validation: copyTexture: 'a' -> 'a': source and destination boxes overlap in one subresource");
+    list.copyTexture(a, {0, 0, 0, 0, 0, 4, 4, 1}, b, {});
+    expectExactError("validation: copyTexture: 'a' -> 'b': formats differ (R32_UINT -> RGBA8_UNORM)");
+    list.copyTexture(a, {0, 0, 0, 0, 0, 8, 8, 1}, a, {1, 0, 0, 0, 0, 0, 0, 0});
+    EXPECT_EQ(m_errors.size(), m_expected + 2) << "src and dst both in ShaderSampled: two reports";
+    m_expected = m_errors.size();
+    list.barrier(rhi::Barrier::tex(a, Access::ShaderSampled, Access::CopySrc, rhi::TextureRange{0, 1}));
+    list.barrier(rhi::Barrier::tex(a, Access::ShaderSampled, Access::CopyDst, rhi::TextureRange{1, 1}));
+    list.copyTexture(a, {0, 0, 0, 0, 0, 8, 8, 1}, a, {1, 0, 0, 0, 0, 0, 0, 0});
+    expectNoNewErrors();
+    list.copyBufferToTexture(staging, 4, a, {1, 0, 0, 0, 0, 0, 0, 0});
+    expectExactError(
+        "validation: copyBufferToTexture: 'staging' -> 'a': 256 bytes at offset 4 exceed the "
+        "buffer's 256 bytes");
+    list.copyBufferToTexture(staging, 0, a, {1, 0, 0, 0, 0, 0, 0, 0});
+    expectNoNewErrors();
+    dev().submit(list);
+}
+
 TEST_F(ValidationTest, ReadTextureNeedsTheTrackedState) {
     rhi::TextureHandle t = makeTexture("t");
     std::vector<uint8_t> texels(16 * 16 * 4, 7), out;

@@ -25,6 +25,17 @@ public:
                             uint64_t size) = 0;
     // VK: vkCmdFillBuffer   GL: glClearNamedBufferSubData (R32UI)
     virtual void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) = 0;
+    // Copies the box srcRegion of src to dstRegion's mip, layer and offset in dst (dstRegion's
+    // extent: zero or equal to the source box). Same format; the source subresource in CopySrc,
+    // the destination one in CopyDst (they may be two mips or layers of one texture).
+    // VK: vkCmdCopyImage   GL: glCopyImageSubData
+    virtual void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
+                             const TextureRegion& dstRegion) = 0;
+    // Tightly packed texels (rows of the region width, then slices) from src at srcOffset (a
+    // multiple of the texel size) into a box of one subresource. src in CopySrc, dst in CopyDst.
+    // VK: vkCmdCopyBufferToImage   GL: glTextureSubImage{2D,3D} from GL_PIXEL_UNPACK_BUFFER
+    virtual void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
+                                     const TextureRegion& dstRegion) = 0;
 
     // --- compute -----------------------------------------------------------------------------
     // VK: vkCmdBindPipeline   GL: glUseProgram (+ fixed-function state for graphics pipelines)

@@ -77,6 +77,11 @@ public:
     // Access::ShaderSampled (a frame graph imports uploaded textures in that state).
     // VK: staging + layout transitions + vkCmdCopyBufferToImage   GL: glTextureSubImage{2D,3D}
     virtual void writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) = 0;
+    // Tightly packed texels (rows of region.width, then slices) of a box inside one subresource;
+    // the texels outside it keep their contents. States as writeTexture.
+    // VK: staging + vkCmdCopyBufferToImage (imageOffset)   GL: glTextureSubImage{2D,3D} (offset)
+    virtual void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
+                                    uint64_t size) = 0;
     // Persistently mapped pointer of a MemoryType::Upload / Readback buffer, else nullptr.
     // VK: vkMapMemory (once)   GL: glMapNamedBufferRange(MAP_PERSISTENT | MAP_COHERENT)
     virtual void* mappedPointer(BufferHandle h) = 0;

@@ -205,6 +205,16 @@ struct TextureSubresource {
     uint32_t layer = 0;
 };
 
+// A box of texels inside one subresource: mip, array layer (Tex2DArray; 0 otherwise), offset and
+// extent in texels. A zero width / height / depth reaches the end of the mip in that dimension, so
+// the default region is all of mip 0, layer 0. Tex2D / Tex2DArray regions have z = 0 and depth 1.
+struct TextureRegion {
+    uint32_t mip = 0;
+    uint32_t layer = 0;
+    uint32_t x = 0, y = 0, z = 0;
+    uint32_t width = 0, height = 0, depth = 0;
+};
+
 enum class Filter : uint8_t { Nearest, Linear };
 enum class AddressMode : uint8_t { ClampToEdge, Repeat, MirroredRepeat };
 
