@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <optional>
 
 namespace penumbra::fg {
 
@@ -16,8 +17,7 @@ namespace {
 
 using rhi::Access;
 
-constexpr Access kWriteMask = Access::ShaderWrite | Access::ColorTarget | Access::DepthTargetWrite |
-                              Access::CopyDst | Access::HostWrite;
+constexpr Access kWriteMask = rhi::kWriteAccesses;
 constexpr Access kTextureAccesses = Access::ShaderSampled | Access::ShaderRead | Access::ShaderWrite |
                                     Access::ColorTarget | Access::DepthTargetWrite | Access::DepthTargetRead |
                                     Access::CopySrc | Access::CopyDst | Access::HostRead | Access::HostWrite |
@@ -90,7 +90,56 @@ uint64_t textureBytes(const rhi::TextureDesc& d) {
 
 const char* typeName(bool texture) { return texture ? "texture" : "buffer"; }
 
+// Whether one pass may combine these reads and writes on one subresource.
+bool compatibleUse(Access read, Access write, bool isTexture) {
+    if (!any(write)) return true;
+    Access compatibleReads = Access::None;
+    if (write == Access::ShaderWrite)
+        compatibleReads = Access::ShaderRead;
+    else if (write == Access::DepthTargetWrite)
+        compatibleReads = Access::DepthTargetRead;
+    else if (write == Access::CopyDst && !isTexture)
+        compatibleReads = Access::CopySrc;
+    return hasSingleBit(write) && !any(read & ~compatibleReads);
+}
+
+// Mip levels and array layers a texture's state is tracked in.
+uint32_t mipCountOf(const rhi::TextureDesc& d) { return std::max(d.mipLevels, 1u); }
+uint32_t layerCountOf(const rhi::TextureDesc& d) {
+    return d.dimension == rhi::TextureDimension::Tex2DArray ? std::max(d.depthOrLayers, 1u) : 1u;
+}
+
+// [first, end) of a range with kAllMips/kAllLayers meaning "to the end".
+std::pair<uint32_t, uint32_t> span(uint32_t base, uint32_t count, uint32_t total) {
+    const uint32_t end = count == kAllMips ? total : base + std::min(count, total - std::min(base, total));
+    return {std::min(base, total), std::max(std::min(end, total), std::min(base, total))};
+}
+
 }  // namespace
+
+std::string toString(const Subresource& p) {
+    if (p.isWhole()) return {};
+    std::string out;
+    if (p.baseMip != 0 || p.mipCount != kAllMips)
+        out += p.mipCount == 1
+                   ? "mip " + std::to_string(p.baseMip)
+                   : "mips " + std::to_string(p.baseMip) + "+" +
+                         (p.mipCount == kAllMips ? std::string("all") : std::to_string(p.mipCount));
+    if (p.baseLayer != 0 || p.layerCount != kAllLayers) {
+        if (!out.empty()) out += ", ";
+        out += p.layerCount == 1
+                   ? "layer " + std::to_string(p.baseLayer)
+                   : "layers " + std::to_string(p.baseLayer) + "+" +
+                         (p.layerCount == kAllLayers ? std::string("all") : std::to_string(p.layerCount));
+    }
+    if (p.offset != std::array<uint32_t, 3>{0, 0, 0} || p.extent != std::array<uint32_t, 3>{0, 0, 0}) {
+        if (!out.empty()) out += ", ";
+        out += "box (" + std::to_string(p.offset[0]) + "," + std::to_string(p.offset[1]) + "," +
+               std::to_string(p.offset[2]) + ") size (" + std::to_string(p.extent[0]) + "," +
+               std::to_string(p.extent[1]) + "," + std::to_string(p.extent[2]) + ")";
+    }
+    return out;
+}
 
 const char* toString(PassKind kind) {
     switch (kind) {
@@ -144,15 +193,11 @@ BufferRef PassBuilder::createBuffer(std::string name, const rhi::BufferDesc& des
 }
 
 TextureRef PassBuilder::read(TextureRef ref, rhi::Access usage) {
-    uint32_t r = m_graph.resolve(ref.index, ref.epoch, FrameGraph::ResourceType::Texture);
-    if (r == kInvalidIndex) {
-        if (!m_graph.m_failed || ref.isValid())
-            m_graph.error("pass '" + m_graph.m_passes[m_pass].name +
-                          "' reads a texture that was never created (invalid or stale ref)");
-        return ref;
-    }
-    m_graph.declare(m_pass, r, usage, false);
-    return ref;
+    return m_graph.declareTexture(m_pass, ref, usage, false, {});
+}
+
+TextureRef PassBuilder::read(TextureRef ref, rhi::Access usage, const Subresource& part) {
+    return m_graph.declareTexture(m_pass, ref, usage, false, part);
 }
 
 BufferRef PassBuilder::read(BufferRef ref, rhi::Access usage) {
@@ -168,15 +213,11 @@ BufferRef PassBuilder::read(BufferRef ref, rhi::Access usage) {
 }
 
 TextureRef PassBuilder::write(TextureRef ref, rhi::Access usage) {
-    uint32_t r = m_graph.resolve(ref.index, ref.epoch, FrameGraph::ResourceType::Texture);
-    if (r == kInvalidIndex) {
-        if (!m_graph.m_failed || ref.isValid())
-            m_graph.error("pass '" + m_graph.m_passes[m_pass].name +
-                          "' writes a texture that was never created (invalid or stale ref)");
-        return ref;
-    }
-    m_graph.declare(m_pass, r, usage, true);
-    return ref;
+    return m_graph.declareTexture(m_pass, ref, usage, true, {});
+}
+
+TextureRef PassBuilder::write(TextureRef ref, rhi::Access usage, const Subresource& part) {
+    return m_graph.declareTexture(m_pass, ref, usage, true, part);
 }
 
 BufferRef PassBuilder::write(BufferRef ref, rhi::Access usage) {
@@ -253,7 +294,8 @@ FrameGraph::FrameGraph(rhi::Device& device, rhi::LogCallback log)
 FrameGraph::~FrameGraph() {
     for (PooledTexture& t : m_texturePool) m_device.destroy(t.handle);
     for (PooledBuffer& b : m_bufferPool) m_device.destroy(b.handle);
-    if (m_queryPool) m_device.destroy(m_queryPool);
+    for (TimingFrame& t : m_timingRing)
+        if (t.pool) m_device.destroy(t.pool);
 }
 
 void FrameGraph::log(rhi::LogSeverity severity, const std::string& message) const {
@@ -279,9 +321,7 @@ void FrameGraph::reset() {
     m_compiled = false;
     m_failed = false;
     m_executed = false;
-    m_timestampsRecorded = false;
     m_timingsCollected = false;
-    m_cpuMs.clear();
     m_timings.clear();
     for (PooledTexture& t : m_texturePool) t.inUse = false;
     for (PooledBuffer& b : m_bufferPool) b.inUse = false;
@@ -321,7 +361,82 @@ const FrameGraph::ResourceUse* FrameGraph::findUse(uint32_t pass, uint32_t resou
     return nullptr;
 }
 
-bool FrameGraph::declare(uint32_t pass, uint32_t resource, rhi::Access usage, bool isWrite) {
+TextureRef FrameGraph::declareTexture(uint32_t pass, TextureRef ref, rhi::Access usage, bool isWrite,
+                                      const Subresource& part) {
+    uint32_t r = resolve(ref.index, ref.epoch, ResourceType::Texture);
+    if (r == kInvalidIndex) {
+        if (!m_failed || ref.isValid())
+            error("pass '" + m_passes[pass].name + "' " + (isWrite ? "writes" : "reads") +
+                  " a texture that was never created (invalid or stale ref)");
+        return ref;
+    }
+    declare(pass, r, usage, isWrite, part);
+    return ref;
+}
+
+bool FrameGraph::checkPart(const PassNode& p, const ResourceNode& res, const Subresource& part) const {
+    if (part.isWhole()) return true;
+    const rhi::TextureDesc& d = res.textureDesc;
+    const uint32_t mips = mipCountOf(d), layers = layerCountOf(d);
+    const bool mipsOk = part.baseMip < mips && part.mipCount != 0 &&
+                        (part.mipCount == kAllMips || part.mipCount <= mips - part.baseMip);
+    const bool layersOk = part.baseLayer < layers && part.layerCount != 0 &&
+                          (part.layerCount == kAllLayers || part.layerCount <= layers - part.baseLayer);
+    bool boxOk = mipsOk;
+    if (mipsOk) {
+        const auto [m0, m1] = span(part.baseMip, part.mipCount, mips);
+        const bool is3D = d.dimension == rhi::TextureDimension::Tex3D;
+        for (uint32_t m = m0; m < m1 && boxOk; ++m) {
+            const uint32_t size[3] = {std::max(d.width >> m, 1u), std::max(d.height >> m, 1u),
+                                      is3D ? std::max(d.depthOrLayers >> m, 1u) : 1u};
+            for (int a = 0; a < 3; ++a) {
+                const uint32_t extent =
+                    part.extent[a] ? part.extent[a] : size[a] - std::min(part.offset[a], size[a]);
+                if (part.offset[a] >= size[a] || extent > size[a] - part.offset[a]) boxOk = false;
+            }
+        }
+    }
+    if (mipsOk && layersOk && boxOk) return true;
+    const_cast<FrameGraph*>(this)->error(
+        "pass '" + p.name + "' declares " + toString(part) + " of texture '" + res.name +
+        "', which is outside the texture (" + std::to_string(mips) + " mip(s), " + std::to_string(layers) +
+        " layer(s), " + std::to_string(d.width) + "x" + std::to_string(d.height) + "x" +
+        std::to_string(d.depthOrLayers) + ")");
+    return false;
+}
+
+// Every subresource the parts of `use` cover must be used in one compatible way.
+bool FrameGraph::checkParts(const PassNode& p, const ResourceNode& res, const ResourceUse& use) {
+    const bool isTexture = res.type == ResourceType::Texture;
+    const uint32_t mips = isTexture ? mipCountOf(res.textureDesc) : 1;
+    const uint32_t layers = isTexture ? layerCountOf(res.textureDesc) : 1;
+    std::vector<Access> read(size_t(mips) * layers, Access::None), write(read);
+    for (const Part& part : use.parts) {
+        const auto [m0, m1] = span(part.range.baseMip, part.range.mipCount, mips);
+        const auto [l0, l1] = span(part.range.baseLayer, part.range.layerCount, layers);
+        for (uint32_t m = m0; m < m1; ++m)
+            for (uint32_t l = l0; l < l1; ++l) {
+                read[m * layers + l] |= part.access & ~kWriteMask;
+                write[m * layers + l] |= part.access & kWriteMask;
+            }
+    }
+    for (size_t i = 0; i < read.size(); ++i) {
+        if (compatibleUse(read[i], write[i], isTexture)) continue;
+        std::string what = std::string(typeName(isTexture)) + " '" + res.name + "'";
+        if (mips * layers > 1)
+            what += " (mip " + std::to_string(i / layers) + ", layer " + std::to_string(i % layers) + ")";
+        std::string readText = any(read[i]) ? rhi::toString(read[i]) : std::string("nothing");
+        error("pass '" + p.name + "' uses " + what + " with incompatible usages in one pass (reads " +
+              readText + ", writes " + rhi::toString(write[i]) +
+              "); a pass may only combine ShaderRead+ShaderWrite, DepthTargetRead+DepthTargetWrite or, for "
+              "buffers, CopySrc+CopyDst on one subresource");
+        return false;
+    }
+    return true;
+}
+
+bool FrameGraph::declare(uint32_t pass, uint32_t resource, rhi::Access usage, bool isWrite,
+                         const Subresource& part) {
     PassNode& p = m_passes[pass];
     ResourceNode& res = m_resources[resource];
     const bool isTexture = res.type == ResourceType::Texture;
@@ -383,29 +498,19 @@ bool FrameGraph::declare(uint32_t pass, uint32_t resource, rhi::Access usage, bo
         return false;
     }
 
-    Access newRead = use->read | reads;
-    Access newWrite = use->write | writes;
-    if (any(newWrite)) {
-        Access compatibleReads = Access::None;
-        bool singleWrite = hasSingleBit(newWrite);
-        if (newWrite == Access::ShaderWrite)
-            compatibleReads = Access::ShaderRead;
-        else if (newWrite == Access::DepthTargetWrite)
-            compatibleReads = Access::DepthTargetRead;
-        else if (newWrite == Access::CopyDst && !isTexture)
-            compatibleReads = Access::CopySrc;
-        if (!singleWrite || any(newRead & ~compatibleReads)) {
-            std::string readText = any(newRead) ? rhi::toString(newRead) : std::string("nothing");
-            error(
-                "pass '" + p.name + "' uses " + what + " with incompatible usages in one pass (reads " +
-                readText + ", writes " + rhi::toString(newWrite) +
-                "); a pass may only combine ShaderRead+ShaderWrite, DepthTargetRead+DepthTargetWrite or, for "
-                "buffers, CopySrc+CopyDst");
-            return false;
-        }
-    }
-    use->read = newRead;
-    use->write = newWrite;
+    if (isTexture && !checkPart(p, res, part)) return false;
+    auto same = std::find_if(use->parts.begin(), use->parts.end(), [&](const Part& x) {
+        return x.range.baseMip == part.baseMip && x.range.mipCount == part.mipCount &&
+               x.range.baseLayer == part.baseLayer && x.range.layerCount == part.layerCount &&
+               x.range.offset == part.offset && x.range.extent == part.extent;
+    });
+    if (same != use->parts.end())
+        same->access |= usage;
+    else
+        use->parts.push_back(Part{part, usage});
+    if (!checkParts(p, res, *use)) return false;
+    use->read = use->read | reads;
+    use->write = use->write | writes;
     if (any(writes) && use->outputVersion == 0) {
         res.producers.push_back(pass);
         res.version = uint32_t(res.producers.size());
@@ -620,7 +725,8 @@ bool FrameGraph::allocate() {
         s.imported = true;
         s.texture = r.importedTexture;
         s.buffer = r.importedBuffer;
-        s.state = r.initialState;
+        s.textureDesc = r.textureDesc;
+        initSlotState(s, r.initialState);
         s.resources.push_back(ri);
         r.slot = uint32_t(m_slots.size());
         r.endState = r.initialState;
@@ -664,6 +770,7 @@ bool FrameGraph::allocate() {
             s.type = r.type;
             s.textureDesc = r.textureDesc;
             s.bufferDesc = r.bufferDesc;
+            initSlotState(s, Access::None);
             chosen = uint32_t(m_slots.size());
             m_slots.push_back(std::move(s));
         }
@@ -770,6 +877,77 @@ void FrameGraph::releaseUnusedPoolEntries(bool all) {
 
 void FrameGraph::trimPool() { releaseUnusedPoolEntries(true); }
 
+void FrameGraph::initSlotState(Slot& s, rhi::Access state) const {
+    const bool isTexture = s.type == ResourceType::Texture;
+    s.mips = isTexture ? mipCountOf(s.textureDesc) : 1;
+    s.layers = isTexture ? layerCountOf(s.textureDesc) : 1;
+    s.state.assign(size_t(s.mips) * s.layers, state);
+}
+
+// Moves the subresources of `s` whose entry in `need` is not None to that state and appends the
+// barriers this takes to `out`. With `onlyChanges` a barrier is placed only where the state
+// differs (end-of-frame transitions); otherwise also between two uses of one state that includes
+// a write (RAW / WAW between passes). When the whole resource moves from one state to one state,
+// that is a single whole-resource barrier; otherwise one barrier per run of layers of a mip, runs
+// of consecutive mips with the same layers and states merged.
+void FrameGraph::transition(Slot& s, const std::vector<std::optional<rhi::Access>>& target,
+                            std::vector<rhi::Barrier>& out, bool onlyChanges) const {
+    std::vector<Access> need(target.size(), Access::None);
+    for (size_t i = 0; i < target.size(); ++i) need[i] = target[i].value_or(Access::None);
+    auto wants = [&](size_t i) {
+        return target[i] && (s.state[i] != need[i] || (!onlyChanges && rhi::isWriteAccess(s.state[i])));
+    };
+    bool uniform = true;
+    for (size_t i = 0; i < s.state.size() && uniform; ++i)
+        uniform = target[i] && need[i] == need[0] && s.state[i] == s.state[0];
+    if (uniform) {
+        if (wants(0))
+            out.push_back(s.type == ResourceType::Texture ? rhi::Barrier::tex(s.texture, s.state[0], need[0])
+                                                          : rhi::Barrier::buf(s.buffer, s.state[0], need[0]));
+        std::fill(s.state.begin(), s.state.end(), need[0]);
+        return;
+    }
+    const size_t first = out.size();
+    for (uint32_t m = 0; m < s.mips; ++m) {
+        for (uint32_t l = 0; l < s.layers;) {
+            const size_t i = size_t(m) * s.layers + l;
+            if (!wants(i)) {
+                ++l;
+                continue;
+            }
+            uint32_t end = l + 1;
+            while (end < s.layers && wants(i + (end - l)) && s.state[i + (end - l)] == s.state[i] &&
+                   need[i + (end - l)] == need[i])
+                ++end;
+            rhi::TextureRange range{m, 1, l, end - l};
+            if (range.baseLayer == 0 && end == s.layers) range.layerCount = rhi::kRemaining;
+            rhi::Barrier b = rhi::Barrier::tex(s.texture, s.state[i], need[i], range);
+            // Merge with the previous mip's barrier when it covers the same layers and states.
+            bool merged = false;
+            for (size_t k = out.size(); k-- > first && !merged;) {
+                rhi::Barrier& prev = out[k];
+                if (prev.range.baseMip + prev.range.mipCount == m &&
+                    prev.range.baseLayer == range.baseLayer && prev.range.layerCount == range.layerCount &&
+                    prev.before == b.before && prev.after == b.after) {
+                    ++prev.range.mipCount;
+                    merged = true;
+                }
+            }
+            if (!merged) out.push_back(b);
+            l = end;
+        }
+    }
+    for (size_t i = 0; i < s.state.size(); ++i)
+        if (target[i]) s.state[i] = need[i];
+}
+
+// The state of a resource when all its subresources are in one state, else Access::None.
+rhi::Access FrameGraph::uniformState(const Slot& s) const {
+    for (Access a : s.state)
+        if (a != s.state.front()) return Access::None;
+    return s.state.empty() ? Access::None : s.state.front();
+}
+
 void FrameGraph::placeBarriers() {
     for (uint32_t e = 0; e < m_order.size(); ++e) {
         const PassNode& p = m_passes[m_order[e]];
@@ -779,19 +957,24 @@ void FrameGraph::placeBarriers() {
         for (const ResourceUse& u : p.uses) {
             ResourceNode& r = m_resources[u.resource];
             Slot& s = m_slots[r.slot];
-            const Access need = u.read | u.write;
             // Every life of a transient starts with undefined contents.
-            const Access prev = (!r.imported && r.firstUse == e) ? Access::None : s.state;
+            if (!r.imported && r.firstUse == e) std::fill(s.state.begin(), s.state.end(), Access::None);
+            // The state each subresource needs: the union of the accesses declared on it.
+            std::vector<std::optional<Access>> need(s.state.size());
+            for (const Part& part : u.parts) {
+                const auto [m0, m1] = span(part.range.baseMip, part.range.mipCount, s.mips);
+                const auto [l0, l1] = span(part.range.baseLayer, part.range.layerCount, s.layers);
+                for (uint32_t m = m0; m < m1; ++m)
+                    for (uint32_t l = l0; l < l1; ++l) {
+                        std::optional<Access>& n = need[size_t(m) * s.layers + l];
+                        n = n.value_or(Access::None) | part.access;
+                    }
+            }
             // A state change (layout, or a different kind of access to wait for), or a hazard
             // between passes in one state that includes a write (RAW / WAW). Between readers in the
             // same read state nothing is needed.
-            const bool barrier = prev != need || rhi::isWriteAccess(prev);
-            if (barrier)
-                cp.barriers.push_back(s.type == ResourceType::Texture
-                                          ? rhi::Barrier::tex(s.texture, prev, need)
-                                          : rhi::Barrier::buf(s.buffer, prev, need));
-            s.state = need;
-            r.endState = need;
+            transition(s, need, cp.barriers, false);
+            r.endState = uniformState(s);
         }
         m_info.passes.push_back(std::move(cp));
     }
@@ -800,13 +983,11 @@ void FrameGraph::placeBarriers() {
         if (r.slot == kInvalidIndex) continue;
         Slot& s = m_slots[r.slot];
         bool wantsFinal = r.imported || (r.output && r.finalState != Access::None);
-        if (wantsFinal && s.state != r.finalState) {
-            m_info.finalBarriers.push_back(s.type == ResourceType::Texture
-                                               ? rhi::Barrier::tex(s.texture, s.state, r.finalState)
-                                               : rhi::Barrier::buf(s.buffer, s.state, r.finalState));
-            s.state = r.finalState;
+        if (wantsFinal) {
+            transition(s, std::vector<std::optional<Access>>(s.state.size(), r.finalState),
+                       m_info.finalBarriers, true);
+            r.endState = r.finalState;
         }
-        if (wantsFinal) r.endState = r.finalState;
     }
 }
 
@@ -829,62 +1010,113 @@ void FrameGraph::execute(rhi::CommandList& cmd) {
     m_executed = true;
 
     const uint32_t passCount = uint32_t(m_order.size());
+    TimingFrame& tf = currentTimingFrame();
+    if (tf.pending) {
+        // The ring came round before this pool's results were collected: read them now (without
+        // waiting if they are there) and hand them to the next pollTimings().
+        std::optional<FrameTimings> early = readTimings(tf, false);
+        if (!early) early = readTimings(tf, true);
+        if (early) m_timingsReady.push_back(std::move(*early));
+    }
     bool timestamps = m_device.info().limits.timestamps && passCount > 0;
-    if (timestamps && m_queryCapacity < 2 * passCount) {
-        if (m_queryPool) m_device.destroy(m_queryPool);
-        uint32_t capacity = std::max({2 * passCount, 2 * m_queryCapacity, 32u});
-        m_queryPool = m_device.createQueryPool(rhi::QueryPoolDesc{capacity, "frame graph timestamps"});
-        m_queryCapacity = m_queryPool ? capacity : 0;
-        if (!m_queryPool)
+    if (timestamps && tf.capacity < 2 * passCount) {
+        // (Re)create the pools of every idle slot of the ring at once, so a steady frame loop
+        // creates nothing after its first frame.
+        const uint32_t capacity = std::max({2 * passCount, 2 * tf.capacity, 32u});
+        for (TimingFrame& slot : m_timingRing) {
+            if ((slot.pending && &slot != &tf) || slot.capacity >= 2 * passCount) continue;
+            if (slot.pool) m_device.destroy(slot.pool);
+            slot.pool = m_device.createQueryPool(rhi::QueryPoolDesc{capacity, "frame graph timestamps"});
+            slot.capacity = slot.pool ? capacity : 0;
+        }
+        if (!tf.pool)
             log(rhi::LogSeverity::Warning,
                 "frame graph: could not create the timestamp query pool; no GPU timings");
     }
-    timestamps = timestamps && m_queryPool;
-    if (timestamps) cmd.resetQueries(m_queryPool, 0, 2 * passCount);
-    m_timestampsRecorded = timestamps;
+    timestamps = timestamps && tf.pool;
+    if (timestamps) cmd.resetQueries(tf.pool, 0, 2 * passCount);
+    tf.frame = m_frame;
+    tf.pending = true;
+    tf.timestamps = timestamps;
+    tf.names.clear();
+    tf.cpuMs.assign(passCount, 0.0);
 
-    m_cpuMs.assign(passCount, 0.0);
     for (uint32_t e = 0; e < passCount; ++e) {
         PassNode& p = m_passes[m_order[e]];
         const CompiledPass& cp = m_info.passes[e];
+        tf.names.push_back(p.name);
         auto start = std::chrono::steady_clock::now();
         cmd.pushDebugGroup(p.name);
-        if (timestamps) cmd.writeTimestamp(m_queryPool, 2 * e);
+        if (timestamps) cmd.writeTimestamp(tf.pool, 2 * e);
         if (!cp.barriers.empty()) cmd.barrier(std::span<const rhi::Barrier>(cp.barriers));
         PassContext ctx(cmd, m_device, *this, m_order[e]);
         p.executor->run(ctx);
-        if (timestamps) cmd.writeTimestamp(m_queryPool, 2 * e + 1);
+        if (timestamps) cmd.writeTimestamp(tf.pool, 2 * e + 1);
         cmd.popDebugGroup();
-        m_cpuMs[e] =
+        tf.cpuMs[e] =
             std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     }
     if (!m_info.finalBarriers.empty()) cmd.barrier(std::span<const rhi::Barrier>(m_info.finalBarriers));
 }
 
-std::vector<PassTiming> FrameGraph::collectTimings() {
-    if (!m_executed) return {};
-    if (m_timingsCollected) return m_timings;
-    m_timingsCollected = true;
-
-    const uint32_t passCount = uint32_t(m_order.size());
-    m_timings.resize(passCount);
+std::optional<FrameTimings> FrameGraph::readTimings(TimingFrame& t, bool blocking) {
+    if (!t.pending) return std::nullopt;
+    const uint32_t passCount = uint32_t(t.names.size());
+    FrameTimings out;
+    out.frame = t.frame;
+    out.passes.resize(passCount);
     for (uint32_t e = 0; e < passCount; ++e) {
-        m_timings[e].name = m_passes[m_order[e]].name;
-        m_timings[e].cpuMs = m_cpuMs[e];
-        m_timings[e].gpuMs = std::numeric_limits<double>::quiet_NaN();
+        out.passes[e].name = t.names[e];
+        out.passes[e].cpuMs = t.cpuMs[e];
+        out.passes[e].gpuMs = std::numeric_limits<double>::quiet_NaN();
     }
-    if (m_timestampsRecorded && passCount > 0) {
+    if (t.timestamps && passCount > 0) {
         std::vector<uint64_t> ns(2 * size_t(passCount), 0);
-        if (m_device.readTimestamps(m_queryPool, 0, 2 * passCount, ns.data())) {
+        const bool ok = blocking ? m_device.readTimestamps(t.pool, 0, 2 * passCount, ns.data())
+                                 : m_device.tryReadTimestamps(t.pool, 0, 2 * passCount, ns.data());
+        if (!ok && !blocking) return std::nullopt;
+        if (ok) {
             for (uint32_t e = 0; e < passCount; ++e) {
-                uint64_t begin = ns[2 * e], end = ns[2 * e + 1];
-                m_timings[e].gpuMs = end >= begin ? double(end - begin) * 1e-6 : 0.0;
+                const uint64_t begin = ns[2 * e], end = ns[2 * e + 1];
+                out.passes[e].gpuMs = end >= begin ? double(end - begin) * 1e-6 : 0.0;
             }
         } else {
             log(rhi::LogSeverity::Warning, "frame graph: reading the pass timestamps failed; gpuMs is NaN");
         }
     }
+    t.pending = false;
+    if (t.frame == m_frame && m_executed) {
+        m_timings = out.passes;
+        m_timingsCollected = true;
+    }
+    return out;
+}
+
+std::vector<PassTiming> FrameGraph::collectTimings() {
+    if (!m_executed) return {};
+    if (m_timingsCollected) return m_timings;
+    readTimings(currentTimingFrame(), true);
     return m_timings;
+}
+
+std::vector<FrameTimings> FrameGraph::pollTimings() {
+    std::vector<FrameTimings> out = std::move(m_timingsReady);
+    m_timingsReady.clear();
+    for (TimingFrame& t : m_timingRing)
+        if (std::optional<FrameTimings> r = readTimings(t, false)) out.push_back(std::move(*r));
+    std::sort(out.begin(), out.end(),
+              [](const FrameTimings& a, const FrameTimings& b) { return a.frame < b.frame; });
+    return out;
+}
+
+std::vector<FrameTimings> FrameGraph::flushTimings() {
+    std::vector<FrameTimings> out = std::move(m_timingsReady);
+    m_timingsReady.clear();
+    for (TimingFrame& t : m_timingRing)
+        if (std::optional<FrameTimings> r = readTimings(t, true)) out.push_back(std::move(*r));
+    std::sort(out.begin(), out.end(),
+              [](const FrameTimings& a, const FrameTimings& b) { return a.frame < b.frame; });
+    return out;
 }
 
 // ---------------------------------------------------------------------------------------------

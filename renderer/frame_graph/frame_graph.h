@@ -14,7 +14,7 @@
 //     ...
 //     if (graph.compile()) graph.execute(cmd);
 //     device.submit(cmd);
-//     auto timings = graph.collectTimings();
+//     for (const fg::FrameTimings& t : graph.pollTimings()) ...   // earlier frames, no waiting
 //
 // Resources
 // - Refs (TextureRef / BufferRef) are small typed ids, valid until the next reset(). A ref kept
@@ -66,12 +66,21 @@
 // - after the last pass, one more batch moves imported resources to their finalState and
 //   transients given a final state in markOutput() to that state.
 //
+// Subresources. A texture may be read or written in parts (Subresource: a mip range, a layer
+// range, a 3D box). The graph tracks every mip level and array layer of a physical texture
+// separately, so a chain of passes that each sample mip i-1 and write mip i gets exactly the
+// barriers of the two mips it touches, and a later whole-texture use transitions only the mips
+// that are in another state (consecutive mips in one state share one barrier). Versions and
+// culling stay per resource: any write to a part makes a new version of the whole resource.
+// Boxes are checked against the mip size and shown in the dump; barriers cover whole mips.
+//
 // Execution. execute() records, per kept pass: pushDebugGroup(name), a GPU timestamp, the
 // barrier batch, the pass's execute callback, a second timestamp, popDebugGroup; then the final
-// barrier batch. The query pool (2 slots per pass) is owned by the graph and grown as needed.
-// collectTimings() must be called after the command list was submitted: it calls
-// Device::readTimestamps, which waits for the GPU. When the device reports
-// info().limits.timestamps == false, no timestamps are recorded and every gpuMs is NaN.
+// barrier batch. Timestamps go into a ring of kTimingFramesInFlight query pools owned by the
+// graph (one per frame, grown as needed): pollTimings() returns, without waiting, every earlier
+// frame whose results have arrived; flushTimings() waits for the rest (end of a run);
+// collectTimings() waits for the current frame (tests and one-shot tools). When the device
+// reports info().limits.timestamps == false, no timestamps are recorded and every gpuMs is NaN.
 //
 // Errors (a resource that was never created or a stale ref, reading a transient before any pass
 // wrote it, incompatible read and write usages of one resource in one pass, an access that makes
@@ -82,8 +91,10 @@
 // The device must outlive the graph. Not thread-safe: use one graph from one thread.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -114,11 +125,56 @@ struct BufferRef {
     friend constexpr bool operator==(const BufferRef&, const BufferRef&) = default;
 };
 
+inline constexpr uint32_t kAllMips = 0xffffffffu;
+inline constexpr uint32_t kAllLayers = 0xffffffffu;
+
+// The part of a texture a pass reads or writes: a range of mip levels, a range of array layers
+// (Tex2DArray) and, for Tex3D textures, a box inside each of those mips (`extent` 0 on an axis:
+// to the end of the mip). The default is the whole texture. Barriers and state are tracked per
+// mip level and array layer; a box narrows what the pass declares (it is checked against the
+// texture's size and shown in the Graphviz dump) but a barrier always covers the whole mip, as
+// GPU image barriers do.
+struct Subresource {
+    uint32_t baseMip = 0;
+    uint32_t mipCount = kAllMips;
+    uint32_t baseLayer = 0;
+    uint32_t layerCount = kAllLayers;
+    std::array<uint32_t, 3> offset{0, 0, 0};  // Tex3D box origin (texels of each mip)
+    std::array<uint32_t, 3> extent{0, 0, 0};  // Tex3D box size; 0 = to the end of the mip
+
+    static Subresource whole() { return {}; }
+    static Subresource mips(uint32_t base, uint32_t count = 1) {
+        return {base, count, 0, kAllLayers, {}, {}};
+    }
+    static Subresource layers(uint32_t base, uint32_t count = 1) {
+        return {0, kAllMips, base, count, {}, {}};
+    }
+    static Subresource region(uint32_t mip, std::array<uint32_t, 3> origin, std::array<uint32_t, 3> size) {
+        return {mip, 1, 0, kAllLayers, origin, size};
+    }
+    bool isWhole() const {
+        return baseMip == 0 && mipCount == kAllMips && baseLayer == 0 && layerCount == kAllLayers &&
+               offset == std::array<uint32_t, 3>{0, 0, 0} && extent == std::array<uint32_t, 3>{0, 0, 0};
+    }
+};
+
+// "mip 1", "layers 2+3", "box (0,0,0) size (8,8,8)"; empty for the whole texture.
+std::string toString(const Subresource& part);
+
 struct PassTiming {
     std::string name;
     double gpuMs = 0.0;  // NaN when the device has no timestamps or they could not be read
     double cpuMs = 0.0;  // time spent recording the pass (barriers + execute callback)
 };
+
+// The timings of one executed frame; `frame` counts reset() calls of the graph.
+struct FrameTimings {
+    uint64_t frame = 0;
+    std::vector<PassTiming> passes;  // kept passes in execution order
+};
+
+// How many frames' timestamps may be in flight before execute() must wait for the oldest.
+inline constexpr uint32_t kTimingFramesInFlight = 4;
 
 struct CompiledPass {
     std::string name;
@@ -167,11 +223,16 @@ public:
     // IndexRead, IndirectRead, DepthTargetRead, CopySrc, HostRead, Present).
     TextureRef read(TextureRef ref, rhi::Access usage);
     BufferRef read(BufferRef ref, rhi::Access usage);
+    // A part of a texture (mip range, layer range, 3D box). One pass may declare several parts of
+    // one texture with different accesses as long as parts with incompatible accesses share no
+    // mip level and layer (e.g. sample mip 0 and write mip 1: a mip chain step).
+    TextureRef read(TextureRef ref, rhi::Access usage, const Subresource& part);
     // `usage` must include a write (ShaderWrite, ColorTarget, DepthTargetWrite, CopyDst,
     // HostWrite). A pass may read and write one resource only as ShaderRead + ShaderWrite,
     // DepthTargetRead + DepthTargetWrite, or (buffers) CopySrc + CopyDst.
     TextureRef write(TextureRef ref, rhi::Access usage);
     BufferRef write(BufferRef ref, rhi::Access usage);
+    TextureRef write(TextureRef ref, rhi::Access usage, const Subresource& part);
     // The pass does something outside the graph (readback, presentation, counters): never culled.
     void sideEffect();
 
@@ -273,9 +334,20 @@ public:
     bool compile();
     // Records every kept pass into `cmd`. Does nothing if compile() did not succeed.
     void execute(rhi::CommandList& cmd);
-    // Per-pass timings of the executed passes, in execution order (culled passes have none).
-    // Call after the command list given to execute() was submitted (it waits for the GPU).
+    // Per-pass timings of this frame's executed passes, in execution order (culled passes have
+    // none). Call after the command list given to execute() was submitted: it WAITS for the GPU.
+    // For tests and one-shot tools; frame loops use pollTimings().
     std::vector<PassTiming> collectTimings();
+    // Non-blocking: the timings of every executed frame whose GPU timestamps are available now and
+    // were not returned before, oldest first (typically one to three frames late). Each frame's
+    // timestamps live in their own query pool of a ring of kTimingFramesInFlight; only when a
+    // frame's pool is needed again before its results arrived does execute() wait for them (the
+    // results are then returned by the next poll).
+    std::vector<FrameTimings> pollTimings();
+    // Waits for every outstanding frame and returns their timings, oldest first (end of a run).
+    std::vector<FrameTimings> flushTimings();
+    // The frame number of the current frame (counts reset() calls).
+    uint64_t frameNumber() const { return m_frame; }
 
     // Graphviz digraph: pass nodes (boxes; culled ones dashed and grey), resource nodes (imported:
     // bold double ellipses; transients: ellipses with their physical resource and the transients
@@ -323,10 +395,18 @@ private:
         rhi::Access endState = rhi::Access::None;
     };
 
+    // One declared part of a texture and the access to it (buffers and whole-texture uses have a
+    // single part covering everything).
+    struct Part {
+        Subresource range;
+        rhi::Access access = rhi::Access::None;
+    };
+
     struct ResourceUse {
         uint32_t resource = kInvalidIndex;
-        rhi::Access read = rhi::Access::None;
-        rhi::Access write = rhi::Access::None;
+        rhi::Access read = rhi::Access::None;   // union over the parts
+        rhi::Access write = rhi::Access::None;  // union over the parts
+        std::vector<Part> parts;
         uint32_t inputVersion = 0;   // version read (and overwritten) by the pass
         uint32_t outputVersion = 0;  // version produced (writes only)
     };
@@ -353,7 +433,9 @@ private:
         rhi::TextureUsage textureUsage = rhi::TextureUsage::None;
         rhi::BufferUsage bufferUsage = rhi::BufferUsage::None;
         std::vector<uint32_t> resources;  // virtual resources mapped to it, in order of first use
-        rhi::Access state = rhi::Access::None;
+        // Current state per subresource: index mip * layers + layer (buffers: one entry).
+        std::vector<rhi::Access> state;
+        uint32_t mips = 1, layers = 1;
     };
 
     struct PooledTexture {
@@ -372,7 +454,16 @@ private:
     uint32_t beginPass(std::string name, PassKind kind, std::unique_ptr<detail::PassExecutor> executor);
     uint32_t createResource(uint32_t pass, std::string name, ResourceType type);
     uint32_t resolve(uint32_t index, uint32_t epoch, ResourceType type) const;
-    bool declare(uint32_t pass, uint32_t resource, rhi::Access usage, bool isWrite);
+    bool declare(uint32_t pass, uint32_t resource, rhi::Access usage, bool isWrite,
+                 const Subresource& part = {});
+    TextureRef declareTexture(uint32_t pass, TextureRef ref, rhi::Access usage, bool isWrite,
+                              const Subresource& part);
+    bool checkPart(const PassNode& p, const ResourceNode& res, const Subresource& part) const;
+    bool checkParts(const PassNode& p, const ResourceNode& res, const ResourceUse& use);
+    void initSlotState(Slot& s, rhi::Access state) const;
+    void transition(Slot& s, const std::vector<std::optional<rhi::Access>>& target,
+                    std::vector<rhi::Barrier>& out, bool onlyChanges) const;
+    rhi::Access uniformState(const Slot& s) const;
     uint32_t importResource(std::string name, ResourceType type, rhi::TextureHandle texture,
                             rhi::BufferHandle buffer, rhi::Access currentState, rhi::Access finalState);
     void markOutputResource(uint32_t resource, rhi::Access finalState);
@@ -404,12 +495,24 @@ private:
     bool m_failed = false;
     bool m_executed = false;
 
-    rhi::QueryPoolHandle m_queryPool;
-    uint32_t m_queryCapacity = 0;
-    bool m_timestampsRecorded = false;
+    // One frame's timestamps: its query pool (2 slots per pass) and what is needed to report them.
+    struct TimingFrame {
+        rhi::QueryPoolHandle pool;
+        uint32_t capacity = 0;
+        uint64_t frame = 0;
+        bool pending = false;     // executed and not yet returned by any timing call
+        bool timestamps = false;  // timestamps were recorded (else gpuMs is NaN)
+        std::vector<std::string> names;
+        std::vector<double> cpuMs;
+    };
+    // Reads `t` (blocking or not); nullopt when not available yet. Marks it returned.
+    std::optional<FrameTimings> readTimings(TimingFrame& t, bool blocking);
+    TimingFrame& currentTimingFrame() { return m_timingRing[m_frame % kTimingFramesInFlight]; }
+
+    TimingFrame m_timingRing[kTimingFramesInFlight];
+    std::vector<FrameTimings> m_timingsReady;  // read early (pool reuse), returned by the next poll
     bool m_timingsCollected = false;
-    std::vector<double> m_cpuMs;
-    std::vector<PassTiming> m_timings;
+    std::vector<PassTiming> m_timings;  // this frame's, once read
 };
 
 }  // namespace penumbra::fg

@@ -106,12 +106,18 @@ std::string FrameGraph::toGraphviz() const {
         const std::string culledStyle = (compiled && p.culled) ? ", style=\"dashed\", color=\"grey60\"" : "";
         for (const ResourceUse& u : p.uses) {
             const std::string res = "r" + std::to_string(u.resource);
-            if (any(u.read))
-                out += "  " + res + " -> " + pass + " [label=\"" + rhi::toString(u.read) + "\"" +
-                       culledStyle + "];\n";
-            if (any(u.write))
-                out += "  " + pass + " -> " + res + " [label=\"" + rhi::toString(u.write) + "\"" +
-                       (culledStyle.empty() ? std::string(", color=\"#b02a37\"") : culledStyle) + "];\n";
+            // One edge per declared part; whole-resource parts carry no subresource text.
+            for (const Part& part : u.parts) {
+                const std::string where = part.range.isWhole() ? "" : "\\n" + toString(part.range);
+                const rhi::Access read = part.access & ~rhi::kWriteAccesses;
+                const rhi::Access write = part.access & rhi::kWriteAccesses;
+                if (any(read))
+                    out += "  " + res + " -> " + pass + " [label=\"" + rhi::toString(read) + where + "\"" +
+                           culledStyle + "];\n";
+                if (any(write))
+                    out += "  " + pass + " -> " + res + " [label=\"" + rhi::toString(write) + where + "\"" +
+                           (culledStyle.empty() ? std::string(", color=\"#b02a37\"") : culledStyle) + "];\n";
+            }
         }
     }
     out += "}\n";

@@ -690,8 +690,9 @@ TEST_F(FrameGraphTest, UnusedPoolEntriesAreReleasedAfterNFrames) {
     EXPECT_EQ(graph().pooledTextureCount(), 0u);
     EXPECT_EQ(graph().compiled().poolEntriesReleased, 1u);
     dev().waitIdle();
-    // Only the timestamp query pool is left besides what existed before.
-    EXPECT_EQ(rhi::null::liveObjectCount(dev()), baseline + 1);
+    // Only the ring of timestamp query pools (one per frame in flight) is left besides what
+    // existed before.
+    EXPECT_EQ(rhi::null::liveObjectCount(dev()), baseline + penumbra::fg::kTimingFramesInFlight);
 
     // Configurable: with retain = 1 an entry goes at the first frame that does not use it.
     graph().setPoolRetainFrames(1);
@@ -947,3 +948,259 @@ TEST_F(FrameGraphErrorTest, ExecuteBeforeCompileAndAddPassAfterCompile) {
 }
 
 }  // namespace
+
+// ---------------------------------------------------------------------------------------------
+// Subresources: mip levels, array layers, 3D boxes
+// ---------------------------------------------------------------------------------------------
+using penumbra::fg::Subresource;
+
+namespace subres {
+
+bool sameRangedBarrier(const rhi::Barrier& a, const rhi::Barrier& b) {
+    return sameBarrier(a, b) && a.range == b.range;
+}
+
+rhi::TextureRange mipRange(uint32_t mip, uint32_t count = 1) { return {mip, count, 0, rhi::kRemaining}; }
+
+}  // namespace subres
+
+// A mip chain as a sequence of passes, each sampling mip i-1 and writing mip i of one transient:
+// every step gets exactly the barriers of the two mips it touches, no pass has a hand-written
+// barrier, and a final reader of the whole chain transitions all mips in one merged barrier.
+TEST_F(FrameGraphTest, MipChainStepsGetPerMipBarriers) {
+    using subres::mipRange;
+    using subres::sameRangedBarrier;
+    rhi::TextureDesc desc = colorDesc(64, 64);
+    desc.mipLevels = 4;
+    TextureRef target =
+        graph().importTexture("target", makeTexture("target", Access::ColorTarget), Access::ColorTarget);
+    TextureRef chain;
+    graph().addPass<TexData>(
+        "mip0", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            chain = d.tex =
+                b.write(b.createTexture("chain", desc), Access::ShaderWrite, Subresource::mips(0));
+        },
+        [](const TexData&, PassContext& ctx) { dispatch(ctx, 8, 8); });
+    for (uint32_t m = 1; m < 4; ++m) {
+        graph().addPass<TexData>(
+            "down" + std::to_string(m), PassKind::Compute,
+            [&](PassBuilder& b, TexData& d) {
+                b.read(chain, Access::ShaderSampled, Subresource::mips(m - 1));
+                d.tex = b.write(chain, Access::ShaderWrite, Subresource::mips(m));
+            },
+            [](const TexData&, PassContext& ctx) { dispatch(ctx, 4, 4); });
+    }
+    addShadePass("use", chain, target);
+    ASSERT_TRUE(graph().compile()) << (m_graphErrors.empty() ? "" : m_graphErrors[0]);
+    EXPECT_TRUE(graph().compiled().culledPasses.empty());
+    const rhi::TextureHandle t = graph().physicalTexture(chain);
+
+    const auto* mip0 = graph().compiled().findPass("mip0");
+    ASSERT_EQ(mip0->barriers.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(mip0->barriers[0],
+                                  rhi::Barrier::tex(t, Access::None, Access::ShaderWrite, mipRange(0))));
+    for (uint32_t m = 1; m < 4; ++m) {
+        const auto* down = graph().compiled().findPass("down" + std::to_string(m));
+        ASSERT_NE(down, nullptr);
+        ASSERT_EQ(down->barriers.size(), 2u) << "down" << m;
+        EXPECT_TRUE(sameRangedBarrier(
+            down->barriers[0],
+            rhi::Barrier::tex(t, Access::ShaderWrite, Access::ShaderSampled, mipRange(m - 1))))
+            << "down" << m;
+        EXPECT_TRUE(sameRangedBarrier(down->barriers[1],
+                                      rhi::Barrier::tex(t, Access::None, Access::ShaderWrite, mipRange(m))))
+            << "down" << m;
+    }
+    // mips 0..2 are already sampled; only mip 3 changes state, as one barrier.
+    const auto* use = graph().compiled().findPass("use");
+    std::vector<rhi::Barrier> onChain;
+    for (const rhi::Barrier& b : use->barriers)
+        if (b.texture == t) onChain.push_back(b);
+    ASSERT_EQ(onChain.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(
+        onChain[0], rhi::Barrier::tex(t, Access::ShaderWrite, Access::ShaderSampled, mipRange(3))));
+    EXPECT_TRUE(m_graphErrors.empty());
+}
+
+// Whole-texture uses of a texture whose mips are in different states: one barrier per run of
+// mips in one state (consecutive mips merged), none for mips already in the needed state.
+TEST_F(FrameGraphTest, WholeTextureUseAfterPartialWritesMergesMipRuns) {
+    using subres::mipRange;
+    using subres::sameRangedBarrier;
+    rhi::TextureDesc desc = colorDesc(32, 32);
+    desc.mipLevels = 5;
+    TextureRef target =
+        graph().importTexture("target", makeTexture("target", Access::ColorTarget), Access::ColorTarget);
+    TextureRef tex;
+    graph().addPass<TexData>(
+        "all", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            tex = d.tex = b.write(b.createTexture("t", desc), Access::ShaderWrite);
+        },
+        [](const TexData&, PassContext& ctx) { dispatch(ctx, 1); });
+    graph().addPass<TexData>(
+        "sample_low", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            d.tex = b.read(tex, Access::ShaderSampled, Subresource::mips(0, 2));
+            b.write(b.createTexture("sink", colorDesc(4, 4)), Access::ShaderWrite);
+            b.sideEffect();
+        },
+        [](const TexData&, PassContext& ctx) { dispatch(ctx, 1); });
+    addShadePass("use", tex, target);
+    ASSERT_TRUE(graph().compile()) << (m_graphErrors.empty() ? "" : m_graphErrors[0]);
+    const rhi::TextureHandle t = graph().physicalTexture(tex);
+    const auto* low = graph().compiled().findPass("sample_low");
+    std::vector<rhi::Barrier> onTex;
+    for (const rhi::Barrier& b : low->barriers)
+        if (b.texture == t) onTex.push_back(b);
+    ASSERT_EQ(onTex.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(
+        onTex[0], rhi::Barrier::tex(t, Access::ShaderWrite, Access::ShaderSampled, mipRange(0, 2))));
+    const auto* use = graph().compiled().findPass("use");
+    onTex.clear();
+    for (const rhi::Barrier& b : use->barriers)
+        if (b.texture == t) onTex.push_back(b);
+    ASSERT_EQ(onTex.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(
+        onTex[0], rhi::Barrier::tex(t, Access::ShaderWrite, Access::ShaderSampled, mipRange(2, 3))));
+}
+
+// Array layers: writing one layer of an imported array and reading it back gives barriers on
+// that layer only; at the end of the frame only that layer returns to the import's state.
+TEST_F(FrameGraphTest, ArrayLayerWritesAreTrackedPerLayer) {
+    using subres::sameRangedBarrier;
+    rhi::TextureDesc d = colorDesc(16, 16);
+    d.dimension = rhi::TextureDimension::Tex2DArray;
+    d.depthOrLayers = 4;
+    d.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::Storage | rhi::TextureUsage::CopySrc;
+    d.debugName = "layers";
+    rhi::TextureHandle handle = dev().createTexture(d);
+    ASSERT_TRUE(handle.isValid());
+    TextureRef layers = graph().importTexture("layers", handle, Access::ShaderSampled);
+    graph().addPass<TexData>(
+        "write_layer2", PassKind::Compute,
+        [&](PassBuilder& b, TexData& t) {
+            t.tex = b.write(layers, Access::ShaderWrite, Subresource::layers(2));
+        },
+        [](const TexData&, PassContext& ctx) { dispatch(ctx, 1); });
+    ASSERT_TRUE(graph().compile()) << (m_graphErrors.empty() ? "" : m_graphErrors[0]);
+    const auto* w = graph().compiled().findPass("write_layer2");
+    ASSERT_EQ(w->barriers.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(
+        w->barriers[0], rhi::Barrier::tex(handle, Access::ShaderSampled, Access::ShaderWrite, {0, 1, 2, 1})));
+    ASSERT_EQ(graph().compiled().finalBarriers.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(
+        graph().compiled().finalBarriers[0],
+        rhi::Barrier::tex(handle, Access::ShaderWrite, Access::ShaderSampled, {0, 1, 2, 1})));
+    EXPECT_EQ(graph().finalState(layers), Access::ShaderSampled);
+}
+
+// 3D boxes: a box inside the mip is accepted (and its barrier covers the whole mip, as GPU image
+// barriers do); two passes updating disjoint boxes of one field are ordered (WAW barrier).
+TEST_F(FrameGraphTest, BoxUpdatesOf3DTextureAreOrdered) {
+    using subres::mipRange;
+    using subres::sameRangedBarrier;
+    rhi::TextureDesc d;
+    d.dimension = rhi::TextureDimension::Tex3D;
+    d.format = rhi::Format::R16_FLOAT;
+    d.width = d.height = d.depthOrLayers = 32;
+    d.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::Storage;
+    d.debugName = "field";
+    rhi::TextureHandle handle = dev().createTexture(d);
+    ASSERT_TRUE(handle.isValid());
+    TextureRef field = graph().importTexture("field", handle, Access::ShaderSampled);
+    for (uint32_t i = 0; i < 2; ++i)
+        graph().addPass<TexData>(
+            "update" + std::to_string(i), PassKind::Compute,
+            [&](PassBuilder& b, TexData& t) {
+                t.tex =
+                    b.write(field, Access::ShaderWrite, Subresource::region(0, {16 * i, 0, 0}, {16, 32, 8}));
+            },
+            [](const TexData&, PassContext& ctx) { dispatch(ctx, 1); });
+    ASSERT_TRUE(graph().compile()) << (m_graphErrors.empty() ? "" : m_graphErrors[0]);
+    const auto* u1 = graph().compiled().findPass("update1");
+    ASSERT_EQ(u1->barriers.size(), 1u);
+    EXPECT_TRUE(sameRangedBarrier(u1->barriers[0],
+                                  rhi::Barrier::tex(handle, Access::ShaderWrite, Access::ShaderWrite)));
+    EXPECT_NE(graph().toGraphviz().find("box (16,0,0) size (16,32,8)"), std::string::npos);
+}
+
+TEST_F(FrameGraphErrorTest, SubresourceOutsideTheTextureAndOverlappingIncompatibleParts) {
+    using penumbra::fg::Subresource;
+    rhi::TextureDesc desc = colorDesc(16, 16);
+    desc.mipLevels = 2;
+    graph().addPass<TexData>(
+        "bad_mip", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            d.tex = b.write(b.createTexture("t", desc), Access::ShaderWrite, Subresource::mips(2));
+        },
+        [](const TexData&, PassContext&) {});
+    ASSERT_EQ(m_graphErrors.size(), 1u);
+    EXPECT_NE(m_graphErrors[0].find("outside the texture"), std::string::npos) << m_graphErrors[0];
+
+    graph().reset();
+    m_graphErrors.clear();
+    TextureRef t;
+    graph().addPass<TexData>(
+        "init", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            t = d.tex = b.write(b.createTexture("t", desc), Access::ShaderWrite);
+        },
+        [](const TexData&, PassContext&) {});
+    graph().addPass<TexData>(
+        "overlap", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            b.read(t, Access::ShaderSampled, Subresource::mips(0, 2));
+            d.tex = b.write(t, Access::ShaderWrite, Subresource::mips(1));
+        },
+        [](const TexData&, PassContext&) {});
+    ASSERT_EQ(m_graphErrors.size(), 1u);
+    EXPECT_NE(m_graphErrors[0].find("(mip 1, layer 0) with incompatible usages"), std::string::npos)
+        << m_graphErrors[0];
+
+    graph().reset();
+    m_graphErrors.clear();
+    graph().addPass<TexData>(
+        "bad_box", PassKind::Compute,
+        [&](PassBuilder& b, TexData& d) {
+            d.tex = b.write(b.createTexture("t", desc), Access::ShaderWrite,
+                            Subresource::region(1, {4, 0, 0}, {8, 8, 1}));
+        },
+        [](const TexData&, PassContext&) {});
+    ASSERT_EQ(m_graphErrors.size(), 1u);
+    EXPECT_NE(m_graphErrors[0].find("box (4,0,0) size (8,8,1)"), std::string::npos) << m_graphErrors[0];
+}
+
+// Timings come back from a ring of query pools without waiting: a 20-frame loop of 10 passes that
+// polls every frame gets every frame exactly once (a few frames late at most), in order, and
+// performs no blocking timestamp read; frames nobody polled while the ring wrapped are kept and
+// returned later; flushTimings() returns what is left at the end of the run.
+TEST_F(FrameGraphTest, TimingsArePolledFromARingWithoutBlocking) {
+    const uint64_t blockingBefore = dev().stats().blockingTimestampReads;
+    std::vector<penumbra::fg::FrameTimings> seen;
+    std::vector<uint64_t> frames;
+    for (int f = 0; f < 20; ++f) {
+        graph().reset();
+        frames.push_back(graph().frameNumber());
+        for (int i = 0; i < 10; ++i)
+            graph().addPass<Empty>(
+                "pass" + std::to_string(i), PassKind::Compute, [](PassBuilder& b, Empty&) { b.sideEffect(); },
+                [](const Empty&, PassContext& ctx) { dispatch(ctx, 1); });
+        ASSERT_TRUE(graph().compile());
+        run();
+        // Frames 5..12 are not polled: the ring (kTimingFramesInFlight pools) wraps meanwhile.
+        if (f < 5 || f > 12)
+            for (auto& t : graph().pollTimings()) seen.push_back(std::move(t));
+    }
+    EXPECT_EQ(dev().stats().blockingTimestampReads, blockingBefore) << "a timestamp read waited in the loop";
+    for (auto& t : graph().flushTimings()) seen.push_back(std::move(t));
+    ASSERT_EQ(seen.size(), frames.size());
+    for (size_t i = 0; i < seen.size(); ++i) {
+        EXPECT_EQ(seen[i].frame, frames[i]);
+        ASSERT_EQ(seen[i].passes.size(), 10u);
+        EXPECT_EQ(seen[i].passes[9].name, "pass9");
+        for (const auto& p : seen[i].passes) EXPECT_GE(p.gpuMs, 0.0) << p.name;
+    }
+    EXPECT_TRUE(graph().flushTimings().empty());
+}
