@@ -40,6 +40,7 @@
 #include <fmt/format.h>
 #include <glm/geometric.hpp>
 
+#include "engine/core/log.h"
 #include "engine/sdf/bvh.h"
 #include "engine/sdf/huge_pages.h"
 #include "engine/sdf/winding.h"
@@ -207,6 +208,22 @@ bool placeGrid(const MeshDiagnostics& d, const BakeSettings& s, Placement& out, 
     for (int a = 0; a < 3; ++a) {
         out.dims[a] = static_cast<uint32_t>(dims[a]);
         total *= out.dims[a];
+    }
+    if (!(h >= kMinVoxelSize)) {
+        error = fmt::format(
+            "voxel size {:.6g} is below the smallest normal 32-bit float ({:.6g}): the distances could not "
+            "be "
+            "stored to a voxel's precision (mesh extent {:.6g}); scale the mesh up or use fewer voxels",
+            h, kMinVoxelSize, longest);
+        return false;
+    }
+    const double diagonal = gridDiagonal(out.dims, h);
+    if (!(diagonal <= kMaxGridDiagonal)) {
+        error = fmt::format(
+            "mesh extent {:.6g} is too large: the grid's diagonal {:.6g} (the largest distance it can hold) "
+            "exceeds the largest 32-bit float ({:.6g}); scale the mesh down",
+            longest, diagonal, kMaxGridDiagonal);
+        return false;
     }
     if (total > kMaxVoxels) {
         error = fmt::format(
@@ -425,8 +442,35 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
     Placement placement;
     if (!placeGrid(clean.diagnostics, settings, placement, result.error)) return;
 
-    // Sign method.
+    // Everything below works in a normalised frame: the local coordinates scaled by a power of two
+    // (exact in binary floating point) that brings the longest extent into [0.5, 1), so neither the
+    // BVH's float bounds nor squared distances overflow or underflow whatever the mesh's units.
+    // Distances are scaled back at the end; for meshes of ordinary size the result is the same.
     const MeshDiagnostics& diag = clean.diagnostics;
+    const glm::dvec3 extent = diag.boundsMax - diag.boundsMin;
+    int exponent = 0;
+    std::frexp(std::max({extent.x, extent.y, extent.z}), &exponent);
+    const double toUnit = std::ldexp(1.0, -exponent), fromUnit = std::ldexp(1.0, exponent);
+    for (glm::dvec3& p : clean.positions) p *= toUnit;
+
+    // Inside-out: flip a closed mesh whose triangles all face inward (so its winding number is -1
+    // inside and its pseudonormals point in).
+    if (diag.inwardOriented && settings.flipInsideOut) {
+        for (glm::uvec3& t : clean.triangles) std::swap(t.y, t.z);
+        for (glm::uvec3& t : clean.windingTriangles) std::swap(t.y, t.z);
+        result.flippedInsideOut = true;
+        log::warn(
+            "bake: the mesh is closed and all its triangles face inward (signed volume {:.6g}): flipped them "
+            "so "
+            "its inside bakes negative",
+            diag.signedVolume);
+    }
+    const std::string orientation =
+        !diag.inwardOriented      ? "closed, consistently oriented manifold"
+        : result.flippedInsideOut ? "closed manifold, consistently oriented inward (inside out, flipped)"
+                                  : "closed manifold, consistently oriented inward (inside out, not flipped)";
+
+    // Sign method.
     SignMethod method = settings.sign;
     bool repairPseudonormal = false;
     if (method == SignMethod::Auto) {
@@ -446,6 +490,7 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
         }
     } else {
         result.signReason = fmt::format("{} requested", toString(method));
+        if (diag.inwardOriented) result.signReason += "; " + orientation;
     }
 
     // Progress: distance first, then the sign; reported as one fraction of the whole bake.
@@ -461,11 +506,11 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
     const bool needPseudonormals = method == SignMethod::Pseudonormal;
     result.timings.bvhMs = msSince(t0);
 
-    SdfGrid& grid = result.grid;
+    SdfGrid& grid = result.grid;  // normalised voxel size and distances until the end
     grid.dims = placement.dims;
-    grid.voxelSize = placement.voxelSize;
+    grid.voxelSize = placement.voxelSize * toUnit;
     const glm::dvec3 originLocal = -0.5 * glm::dvec3(grid.dims) * grid.voxelSize;
-    grid.origin = clean.center + originLocal;
+    grid.origin = clean.center - 0.5 * glm::dvec3(grid.dims) * placement.voxelSize;
     const size_t voxelCount = size_t(grid.dims.x) * grid.dims.y * grid.dims.z;
     resizeHuge(grid.distances, voxelCount, 0.0f);
     std::vector<uint8_t> negative;  // pseudonormal signs
@@ -535,8 +580,8 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
         // region connected to such a pair is corrected up to and including its boundary. Should
         // that reach kRepairShare of the grid, the winding path takes over. (Tolerance of the
         // pair test: float rounding of the stored distances and geometry.)
-        const float separated = static_cast<float>(grid.voxelSize * (1 + 1e-4) +
-                                                   1e-6 * glm::length(diag.boundsMax - diag.boundsMin));
+        const float separated =
+            static_cast<float>(grid.voxelSize * (1 + 1e-4) + 1e-6 * glm::length(extent * toUnit));
         const glm::uvec3 dims = grid.dims;
         const size_t stride[3] = {1, dims.x, size_t(dims.x) * dims.y};
         auto forNeighbours = [&](size_t idx, auto&& fn) {
@@ -628,15 +673,13 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
             }
         }
         if (pairs == 0) {
-            result.signReason = "closed, consistently oriented manifold -> pseudonormal";
+            result.signReason = orientation + " -> pseudonormal";
         } else if (!tooMany) {
             result.signReason = fmt::format(
-                "closed, consistently oriented manifold -> pseudonormal; {} pairs of neighbouring voxels "
-                "away from "
-                "the surface had inconsistent signs (self-intersection, touching or nested surfaces): the "
-                "winding "
-                "number corrected {} voxels",
-                pairs, corrected);
+                "{} -> pseudonormal; {} pairs of neighbouring voxels away from the surface had inconsistent "
+                "signs (self-intersection, touching or nested surfaces): the winding number corrected {} "
+                "voxels",
+                orientation, pairs, corrected);
         } else {
             method = SignMethod::Winding;
             result.signReason = fmt::format(
@@ -688,8 +731,11 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
     result.windingEvaluations = repairEvaluations + (solver ? solver->evaluations() : 0);
     result.timings.signMs = msSince(t0);
 
+    // Back to the mesh's units (the range check of placeGrid keeps every distance a finite float).
+    grid.voxelSize = placement.voxelSize;
     float lo = INFINITY, hi = -INFINITY;
-    for (float d : grid.distances) {
+    for (float& d : grid.distances) {
+        d = static_cast<float>(double(d) * fromUnit);
         lo = std::min(lo, d);
         hi = std::max(hi, d);
     }
@@ -714,6 +760,9 @@ BakeResult bake(const assets::MeshData& mesh, const BakeSettings& settings) {
     } catch (const std::length_error&) {
         result = BakeResult{};
         result.error = "out of memory (allocation too large) while baking";
+    } catch (const std::exception& e) {
+        result = BakeResult{};
+        result.error = fmt::format("internal error while baking: {}", e.what());
     }
     return result;
 }

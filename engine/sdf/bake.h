@@ -26,6 +26,9 @@ struct BakeSettings {
     SignMethod sign = SignMethod::Auto;
     BakeQuality quality = BakeQuality::Medium;
     uint32_t threads = 0;  // 0 = hardware concurrency
+    // A closed mesh whose triangles all face inward (MeshDiagnostics::inwardOriented) is flipped
+    // before the sign is computed, with a warning in the log, so its inside bakes negative.
+    bool flipInsideOut = true;
     // Called from the baking threads' coordinator with progress in [0,1] and a phase name.
     std::function<void(double progress, const char* phase)> progress;
 };
@@ -44,6 +47,7 @@ struct BakeResult {
     BakeTimings timings;
     float minDistance = 0, maxDistance = 0;
     uint64_t windingEvaluations = 0;  // winding-number (or parity) evaluations made by the sign phase
+    bool flippedInsideOut = false;    // the mesh was inward-oriented and flipped (flipInsideOut)
 };
 
 // Grid resolution chosen when neither resolution nor voxelSize is set (documented in FORMATS.md).

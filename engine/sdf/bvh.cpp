@@ -7,6 +7,7 @@
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <stdexcept>
 #include <system_error>
 #include <thread>
 
@@ -76,13 +77,24 @@ void radixSort(std::vector<uint64_t>& keys) {
     }
 }
 
+// An unused lane: marked by child == kEmptyLane, which every traversal tests before using a lane
+// (its bound alone cannot mark it: once squared distances overflow to +inf, "inf <= limit" holds
+// for an infinite limit). The far-away box keeps its bound large for the SIMD code.
 void clearLane(Node4& n, int c) {
-    n.minX[c] = n.minY[c] = n.minZ[c] = n.maxX[c] = n.maxY[c] = n.maxZ[c] = 1e30f;  // distance^2 = inf
+    n.minX[c] = n.minY[c] = n.minZ[c] = n.maxX[c] = n.maxY[c] = n.maxZ[c] = 1e30f;
     n.axisX[c] = n.axisY[c] = n.axisZ[c] = n.radius[c] = 0;
     n.axialMin[c] = -INFINITY;
     n.axialMax[c] = INFINITY;
-    n.child[c] = 0;
+    n.child[c] = TriangleBvh::kEmptyLane;
     n.count[c] = 0;
+}
+
+// Lanes of n that hold a child (bit c set for lane c).
+inline uint32_t usedLanes(const Node4& n) {
+    return (n.child[0] != TriangleBvh::kEmptyLane ? 1u : 0u) |
+           (n.child[1] != TriangleBvh::kEmptyLane ? 2u : 0u) |
+           (n.child[2] != TriangleBvh::kEmptyLane ? 4u : 0u) |
+           (n.child[3] != TriangleBvh::kEmptyLane ? 8u : 0u);
 }
 
 // Pancake of lane c (leaf packets [first, end); its box is set): axis = mean normal; axial range
@@ -204,8 +216,9 @@ inline glm::dvec3 packetVertex(const TriangleBvh::LeafPacket& t, uint32_t lane, 
 // the plane where p projects inside the triangle, else the nearest of the three edges (segment
 // parameters clamped; zero-length edges and zero-area triangles fall back to the edges). Float
 // rounding makes these differ from the exact values by far less than the query's slack, so they
-// only decide which triangles get the exact test. Unused lanes (corners at 1e30) give inf or NaN,
-// which never pass the limit.
+// only decide which triangles get the exact test. Unused lanes (corners at 1e30) give inf or NaN
+// and are never read (a leaf tests its first `count` lanes); a NaN of a used lane (coordinates so
+// large that float overflows) sends that triangle to the exact test.
 #if defined(__SSE2__) || defined(_M_X64)
 struct V3 {
     __m128 x, y, z;
@@ -521,7 +534,7 @@ void TriangleBvh::traverse(const glm::dvec3& p, double& bestSquared, ClosestHit&
         float d2[4];
         leafDistances(packet, px, py, pz, d2);
         for (uint32_t l = 0; l < count; ++l) {
-            if (!(d2[l] <= limit)) continue;
+            if (d2[l] > limit) continue;  // a NaN (float overflow) gets the exact test
             const TriangleClosest c = closestPointOnTriangle(
                 p, packetVertex(packet, l, 0), packetVertex(packet, l, 1), packetVertex(packet, l, 2));
             ++tested;
@@ -542,8 +555,10 @@ void TriangleBvh::traverse(const glm::dvec3& p, double& bestSquared, ClosestHit&
         ++visited;
         float d2[4];
         boundDistances(n, px, py, pz, d2);
-        uint32_t mask = (d2[0] <= limit ? 1u : 0u) | (d2[1] <= limit ? 2u : 0u) | (d2[2] <= limit ? 4u : 0u) |
-                        (d2[3] <= limit ? 8u : 0u);
+        // Used lanes whose bound is within the limit (a NaN bound, from float overflow, is visited).
+        uint32_t mask = ((d2[0] > limit ? 0u : 1u) | (d2[1] > limit ? 0u : 2u) | (d2[2] > limit ? 0u : 4u) |
+                         (d2[3] > limit ? 0u : 8u)) &
+                        usedLanes(n);
         // Children within the limit, nearest first: the nearest is handled now, the others are
         // pushed farthest first.
         int nearest = -1;
@@ -562,6 +577,10 @@ void TriangleBvh::traverse(const glm::dvec3& p, double& bestSquared, ClosestHit&
                     }
                     order[j] = c;  // descending distance
                 }
+                // Entries on the stack are pending siblings of the nodes on the current path (at
+                // most 3 per level), so kStackSize bounds them (depth <= 62, see kStackSize); the
+                // test keeps an overrun impossible regardless.
+                if (sp + (k - 1) > kStackSize) throw std::logic_error("BVH traversal stack exhausted");
                 for (int j = 0; j < k - 1; ++j)
                     stack[sp++] = Entry{n.child[order[j]], n.count[order[j]], d2[order[j]]};
                 nearest = order[k - 1];
@@ -651,13 +670,15 @@ int TriangleBvh::signedCrossings(const glm::dvec3& origin, const glm::dvec3& dir
     while (sp > 0) {
         const Node4& n = m_nodes[stack[--sp]];
         for (int c = 0; c < 4; ++c) {
-            if (n.minX[c] > n.maxX[c] || n.minX[c] >= 1e30f) continue;  // unused lane
+            if (n.child[c] == kEmptyLane) continue;
             float t0 = 0, t1 = INFINITY;
             slab(n.minX[c] - margin, n.maxX[c] + margin, ox, ix, t0, t1);
             slab(n.minY[c] - margin, n.maxY[c] + margin, oy, iy, t0, t1);
             slab(n.minZ[c] - margin, n.maxZ[c] + margin, oz, iz, t0, t1);
             if (!(t0 <= t1)) continue;
             if (n.count[c] == 0) {
+                // At most 3 pending siblings per level plus this node's 4 children (see traverse).
+                if (sp >= kStackSize) throw std::logic_error("BVH ray traversal stack exhausted");
                 stack[sp++] = n.child[c];
                 continue;
             }

@@ -48,6 +48,7 @@ public:
     static constexpr uint32_t kPancakeTriangles =
         1024;  // leaves of up to this many triangles (a multiple of 4)
     static constexpr uint32_t kMaxLeafTriangles = 4;
+    static constexpr uint32_t kEmptyLane = UINT32_MAX;  // Node4::child of an unused lane
 
     // Builds over the given mesh (copied; the arrays need not outlive the BVH). threads = 0 uses
     // the hardware concurrency. Triangles must reference valid positions.
@@ -78,7 +79,8 @@ public:
 
     // Four children's bounds, structure of arrays. Child c: count[c] == 0 -> node index
     // child[c]; count[c] > 0 -> leaf packet child[c] holding count[c] triangles; unused slots have
-    // an empty box far away (1e30). Pancake: axis 0, radius 0 and an infinite axial range when absent.
+    // child[c] == kEmptyLane (and an empty box far away, 1e30). Pancake: axis 0, radius 0 and an
+    // infinite axial range when absent.
     struct alignas(16) Node4 {
         float minX[4], minY[4], minZ[4], maxX[4], maxY[4], maxZ[4];
         float axisX[4], axisY[4], axisZ[4], radius[4], axialMin[4], axialMax[4];

@@ -452,6 +452,13 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             }
         }
     });
+    // Signed volume, summed in triangle order (the same for any thread count).
+    double volume = 0;
+    for (const glm::uvec3& t : out.triangles) {
+        volume += glm::dot(out.positions[t.x], glm::cross(out.positions[t.y], out.positions[t.z]));
+    }
+    diag.signedVolume = volume / 6;
+    diag.inwardOriented = diag.closedManifold && diag.inconsistentEdges == 0 && diag.signedVolume < 0;
     return true;
 }
 

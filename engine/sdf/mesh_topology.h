@@ -27,6 +27,11 @@ struct MeshDiagnostics {
     bool closedManifold = false;              // no boundary and no non-manifold edges
     uint64_t inconsistentEdges = 0;           // two-triangle edges traversed in the same direction by both
     uint64_t oppositeDuplicateTriangles = 0;  // of the duplicates: the ones with flipped orientation
+    // Sum over the kept triangles (a, b, c) of a . (b x c) / 6, about the bounds centre: for a closed,
+    // consistently oriented mesh the enclosed volume, negative when its triangles face inward.
+    double signedVolume = 0;
+    // Closed manifold, no inconsistent edges and signedVolume < 0: the whole mesh is inside out.
+    bool inwardOriented = false;
     glm::dvec3 boundsMin{0}, boundsMax{0};
 };
 

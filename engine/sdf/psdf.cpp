@@ -106,9 +106,24 @@ float dequantiseU8(uint8_t q, double bandWidth) { return float((double(q) / 255.
 
 std::string fmtVec(const glm::dvec3& v) { return fmt::format("({}, {}, {})", v.x, v.y, v.z); }
 
+// Euclidean length without overflow or underflow in the squares (glm::length squares: it gives
+// inf from about 1.3e154 on); inf only when the length itself exceeds the largest double.
+double length3(const glm::dvec3& v) { return std::hypot(v.x, v.y, v.z); }
+
 double distanceToBox(const glm::dvec3& p, const glm::dvec3& lo, const glm::dvec3& hi) {
-    const glm::dvec3 d = glm::max(glm::max(lo - p, p - hi), glm::dvec3(0.0));
-    return glm::length(d);
+    return length3(glm::max(glm::max(lo - p, p - hi), glm::dvec3(0.0)));
+}
+
+// Why dims x voxelSize is outside the range of gridRangeRepresentable (sdf_grid.h), naming fields.
+std::string rangeProblem(const glm::uvec3& dims, double voxelSize) {
+    if (!(voxelSize >= kMinVoxelSize))
+        return fmt::format("field 'voxelSize' is {}: below the smallest normal 32-bit float ({})", voxelSize,
+                           kMinVoxelSize);
+    return fmt::format(
+        "fields 'voxelSize' {} and 'dims' {} x {} x {}: the grid's diagonal {} exceeds the largest 32-bit "
+        "float "
+        "({})",
+        voxelSize, dims.x, dims.y, dims.z, gridDiagonal(dims, voxelSize), kMaxGridDiagonal);
 }
 
 }  // namespace
@@ -264,6 +279,11 @@ bool encodePsdf(const SdfGrid& grid, const PsdfWriteOptions& options, std::vecto
                             fmtVec(grid.origin), grid.voxelSize);
         return false;
     }
+    if (!gridRangeRepresentable(grid.dims, grid.voxelSize)) {
+        error = fmt::format("cannot write an SDF grid whose distances cannot be represented: {}",
+                            rangeProblem(grid.dims, grid.voxelSize));
+        return false;
+    }
     const PsdfEncoding enc = options.encoding;
     const uint32_t bpv = bytesPerVoxel(enc);
     if (bpv == 0) {
@@ -273,8 +293,9 @@ bool encodePsdf(const SdfGrid& grid, const PsdfWriteOptions& options, std::vecto
     double band = 0;
     if (enc == PsdfEncoding::U8) {
         band = options.bandWidth == 0 ? 4.0 * grid.voxelSize : options.bandWidth;
-        if (!std::isfinite(band) || !(band > 0)) {
-            error = fmt::format("u8 band width {} must be finite and > 0", band);
+        if (!std::isfinite(band) || !(band > 0) || !(band <= kMaxGridDiagonal)) {
+            error = fmt::format("u8 band width {} must be finite, > 0 and at most the largest 32-bit float",
+                                band);
             return false;
         }
     }
@@ -440,6 +461,9 @@ bool parseHeader(const uint8_t* data, size_t size, uint64_t fileSize, const std:
     if (!finite3(hd.origin + glm::dvec3(hd.dims) * hd.voxelSize))
         return fail(fmt::format("fields 'origin' {} and 'voxelSize' {}: the grid's far corner is not finite",
                                 fmtVec(hd.origin), hd.voxelSize));
+    if (!gridRangeRepresentable(hd.dims, hd.voxelSize))
+        return fail(fmt::format("{}: the grid's distances cannot be represented",
+                                rangeProblem(hd.dims, hd.voxelSize)));
     const uint32_t bpv = bytesPerVoxel(hd.encoding);
     if (bpv == 0)
         return fail(
@@ -455,6 +479,11 @@ bool parseHeader(const uint8_t* data, size_t size, uint64_t fileSize, const std:
         if (!std::isfinite(hd.bandWidth) || !(hd.bandWidth > 0))
             return fail(fmt::format("field 'bandWidth' is {}: the u8 encoding needs a finite band width > 0",
                                     hd.bandWidth));
+        if (!(hd.bandWidth <= kMaxGridDiagonal))
+            return fail(fmt::format(
+                "field 'bandWidth' is {}: it exceeds the largest 32-bit float ({}), so the band's distances "
+                "cannot be represented",
+                hd.bandWidth, kMaxGridDiagonal));
     } else if (hd.bandWidth != 0) {
         return fail(fmt::format("field 'bandWidth' is {}: it must be 0 for encoding {}", hd.bandWidth,
                                 toString(hd.encoding)));
@@ -616,11 +645,11 @@ double SdfSampler::trilinear(const glm::dvec3& p) const {
 
 double SdfSampler::sample(const glm::dvec3& p) const {
     const glm::dvec3 q = glm::clamp(p, m_boxMin, m_boxMax);
-    const double a = glm::length(p - q);
+    const double a = length3(p - q);
     const double s = trilinear(q);
     if (!(a > 0)) return s;
     const double toMesh = distanceToBox(p, m_meshMin, m_meshMax);
-    if (m_meshInside) return std::max(std::sqrt(a * a + s * s), toMesh);
+    if (m_meshInside) return std::max(std::hypot(a, s), toMesh);
     if (toMesh > 0) return std::max(toMesh, s - a);
     if (s >= a) return s - a;
     if (s <= -a) return s + a;

@@ -3,12 +3,28 @@
 // source mesh's own coordinates and units. Negative = inside.
 #pragma once
 
+#include <cfloat>
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
 #include <glm/vec3.hpp>
 
 namespace penumbra::sdf {
+
+// Grids whose distances 32-bit floats can hold (the baker refuses to make others, .psdf readers
+// and writers refuse them): the voxel size is at least the smallest normal float, so every stored
+// distance keeps an absolute precision of 2^-24 voxel or better, and the grid's diagonal (the
+// largest distance between a voxel centre and a mesh inside the grid) is at most the largest float.
+inline constexpr double kMinVoxelSize = FLT_MIN;     // 1.17549435e-38
+inline constexpr double kMaxGridDiagonal = FLT_MAX;  // 3.40282347e+38
+// Length of the diagonal of a dims * voxelSize box (inf or NaN for unrepresentable input).
+inline double gridDiagonal(const glm::uvec3& dims, double voxelSize) {
+    return voxelSize * std::sqrt(double(dims.x) * dims.x + double(dims.y) * dims.y + double(dims.z) * dims.z);
+}
+inline bool gridRangeRepresentable(const glm::uvec3& dims, double voxelSize) {
+    return voxelSize >= kMinVoxelSize && gridDiagonal(dims, voxelSize) <= kMaxGridDiagonal;
+}
 
 struct SdfGrid {
     glm::uvec3 dims{0, 0, 0};

@@ -138,6 +138,12 @@ def main():
     variant("zero_voxel_size.psdf", voxel=0.0)
     variant("inf_voxel_size.psdf", voxel=float("inf"))
     variant("far_corner_overflow.psdf", origin=[1e308, 0.0, 0.0], voxel=1e308, bmin=[0, 0, 0], bmax=[0, 0, 0])
+    # Finite grids whose distances 32-bit floats cannot hold (issue 8, item 14): a diagonal beyond
+    # FLT_MAX, a voxel below the smallest normal float, a u8 band wider than FLT_MAX.
+    variant("voxel_size_1e300.psdf", origin=[0.0, 0.0, 0.0], voxel=1e300, bmin=[0, 0, 0], bmax=[0, 0, 0])
+    variant("voxel_size_subnormal_float.psdf", origin=[0.0, 0.0, 0.0], voxel=1e-40, bmin=[0, 0, 0],
+            bmax=[0, 0, 0])
+    variant("u8_band_width_huge.psdf", encoding=2, band=1e39)
     variant("unknown_encoding.psdf", encoding=7)
     # u8 payloads quantised with band width 1.0, header band width replaced
     for name, band in (("u8_band_width_zero.psdf", 0.0), ("u8_band_width_nan.psdf", float("nan"))):
