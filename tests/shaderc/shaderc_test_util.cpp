@@ -47,7 +47,16 @@ EShLanguage languageOf(rhi::ShaderStage stage) {
 RunResult runShaderc(const std::vector<std::string>& args) {
     std::string command = shellQuote(SHADERC_EXECUTABLE);
     for (const std::string& a : args) command += " " + shellQuote(a);
-    command += " 2>&1";
+    return runCommand(command);
+}
+
+void writeFile(const std::string& path, const std::string& text) {
+    std::ofstream out(path, std::ios::binary | std::ios::trunc);
+    out << text;
+}
+
+RunResult runCommand(const std::string& shellCommand) {
+    const std::string command = shellCommand + " 2>&1";
     RunResult result;
     FILE* pipe = popen(command.c_str(), "r");
     if (!pipe) return result;

@@ -16,6 +16,9 @@ struct RunResult {
 
 // Runs penumbra-shaderc with `args` (each argument quoted for the shell).
 RunResult runShaderc(const std::vector<std::string>& args);
+// Runs `command` through the shell (stderr joined to stdout).
+RunResult runCommand(const std::string& command);
+void writeFile(const std::string& path, const std::string& text);
 
 std::string fixture(const std::string& relative);  // absolute path under tests/shaderc/fixtures
 std::string scratchDir(const std::string& name);   // fresh empty folder under the build tree

@@ -7,6 +7,12 @@
 # resolved against the including file's directory, then <dir>, then the repository's renderer/shaders.
 # A depfile records every included file, so editing an include rebuilds the programs that use it.
 #
+# Each generated header declares, besides the rhi::ShaderDesc functions, one function overload per
+# variant (`#pragma penumbra_variants` in the sources), C++ structs for the parameter blocks and
+# named slots; it includes <penumbra/shader_interface.h> (tools/shaderc/include) and glm, and the
+# shared ${gen_root}/shaders/view.h with the struct of the per-view block of
+# renderer/shaders/view.glsl, which every program's View block is checked against.
+#
 # The compiler is the `penumbra-shaderc` target of this build, or the executable named by
 # PENUMBRA_SHADERC_EXECUTABLE (for projects that include this file without building the tool).
 # A <dir> that does not exist (git keeps no empty folders) simply contributes no programs.
@@ -14,6 +20,8 @@
 
 get_filename_component(PENUMBRA_REPO_ROOT "${CMAKE_CURRENT_LIST_DIR}/../.." ABSOLUTE)
 set(PENUMBRA_REPO_ROOT "${PENUMBRA_REPO_ROOT}" CACHE INTERNAL "penumbra repository root")
+set(PENUMBRA_VIEW_GLSL "${PENUMBRA_REPO_ROOT}/renderer/shaders/view.glsl" CACHE INTERNAL
+    "the shared per-view block every shader program is checked against")
 
 function(penumbra_add_shader_dir target dir)
   if(NOT TARGET ${target})
@@ -43,6 +51,7 @@ function(penumbra_add_shader_dir target dir)
   set(gen_root "${CMAKE_CURRENT_BINARY_DIR}/generated_shaders/${target}")
   set(out_dir "${gen_root}/shaders")
   set(include_args -I "${dir}" -I "${PENUMBRA_REPO_ROOT}/renderer/shaders")
+  set(view_args --view-glsl "${PENUMBRA_VIEW_GLSL}")
 
   # Programs: "name|kind|source1[|source2]"
   set(programs)
@@ -70,6 +79,9 @@ function(penumbra_add_shader_dir target dir)
     string(REPLACE "|" ";" parts "${p}")
     list(GET parts 0 name)
     list(GET parts 1 kind)
+    if(name STREQUAL "view")
+      message(FATAL_ERROR "penumbra_add_shader_dir: the program name 'view' (in ${dir}) is reserved for the shared per-view header shaders/view.h")
+    endif()
     if(name IN_LIST seen)
       message(FATAL_ERROR "penumbra_add_shader_dir: shader program '${name}' (in ${dir}) is already part of target ${target}")
     endif()
@@ -89,8 +101,9 @@ function(penumbra_add_shader_dir target dir)
     set(depfile "${gen_root}/${name}.d")
     add_custom_command(
       OUTPUT "${header}" "${source}"
-      COMMAND "${tool}" --name ${name} --out-dir "${out_dir}" ${stage_args} ${include_args} --depfile "${depfile}"
-      DEPENDS ${sources} ${tool_dep}
+      COMMAND "${tool}" --name ${name} --out-dir "${out_dir}" ${stage_args} ${include_args} ${view_args}
+              --depfile "${depfile}"
+      DEPENDS ${sources} "${PENUMBRA_VIEW_GLSL}" ${tool_dep}
       DEPFILE "${depfile}"
       COMMENT "penumbra-shaderc: shader program ${name}"
       VERBATIM)
@@ -98,12 +111,32 @@ function(penumbra_add_shader_dir target dir)
   endforeach()
   set_property(TARGET ${target} PROPERTY PENUMBRA_SHADER_PROGRAMS ${seen})
 
+  # The shared per-view header, once per target.
+  get_property(has_view_header TARGET ${target} PROPERTY PENUMBRA_SHADER_VIEW_HEADER SET)
+  if(generated AND NOT has_view_header)
+    set(view_header "${out_dir}/view.h")
+    add_custom_command(
+      OUTPUT "${view_header}"
+      COMMAND "${tool}" --view-header ${view_args} --out-dir "${out_dir}" --depfile "${gen_root}/view.d"
+      DEPENDS "${PENUMBRA_VIEW_GLSL}" ${tool_dep}
+      DEPFILE "${gen_root}/view.d"
+      COMMENT "penumbra-shaderc: shared per-view header"
+      VERBATIM)
+    list(APPEND generated "${view_header}")
+    set_property(TARGET ${target} PROPERTY PENUMBRA_SHADER_VIEW_HEADER ON)
+  endif()
+
   if(generated)
     target_sources(${target} PRIVATE ${generated})
   endif()
   # A custom target (e.g. one that only checks that shaders compile) has no include directories.
   get_target_property(target_type ${target} TYPE)
   if(NOT target_type STREQUAL "UTILITY")
-    target_include_directories(${target} PRIVATE "${gen_root}" "${PENUMBRA_REPO_ROOT}/rhi/include")
+    target_include_directories(${target} PRIVATE "${gen_root}" "${PENUMBRA_REPO_ROOT}/rhi/include"
+                                                 "${PENUMBRA_REPO_ROOT}/tools/shaderc/include")
+    # The parameter structs use glm types (header-only).
+    if(TARGET glm::glm)
+      target_link_libraries(${target} PRIVATE glm::glm)
+    endif()
   endif()
 endfunction()

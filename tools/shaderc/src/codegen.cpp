@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <set>
 #include <sstream>
 
 namespace fs = std::filesystem;
@@ -145,8 +146,8 @@ std::string commentSafe(const std::string& line) {
 
 std::string fileName(const std::string& path) { return fs::path(path).filename().string(); }
 
-void emitSpirv(std::ostringstream& os, const StageOutput& stage) {
-    os << "constexpr uint32_t " << stagePrefix(stage.stage) << "Spirv[] = {";
+void emitSpirv(std::ostringstream& os, const StageOutput& stage, const std::string& prefix) {
+    os << "constexpr uint32_t " << prefix << "Spirv[] = {";
     for (size_t i = 0; i < stage.spirv.size(); ++i) {
         if (i % 8 == 0) os << "\n   ";
         char buf[16];
@@ -157,9 +158,9 @@ void emitSpirv(std::ostringstream& os, const StageOutput& stage) {
 }
 
 // The GLSL text as a NUL-terminated char array, each source line shown as a comment above its bytes.
-void emitGlsl(std::ostringstream& os, const StageOutput& stage) {
+void emitGlsl(std::ostringstream& os, const StageOutput& stage, const std::string& prefix) {
     os << "// GLSL 4.50 core for OpenGL: descriptor sets removed, bindings flattened.\n";
-    os << "constexpr char " << stagePrefix(stage.stage) << "Glsl[] = {\n";
+    os << "constexpr char " << prefix << "Glsl[] = {\n";
     size_t start = 0;
     while (start < stage.glsl.size()) {
         size_t end = stage.glsl.find('\n', start);
@@ -178,9 +179,9 @@ void emitGlsl(std::ostringstream& os, const StageOutput& stage) {
     os << "    0};\n\n";
 }
 
-void emitBindings(std::ostringstream& os, const StageOutput& stage) {
+void emitBindings(std::ostringstream& os, const StageOutput& stage, const std::string& prefix) {
     if (stage.bindings.empty()) return;
-    os << "constexpr rhi::ShaderBinding " << stagePrefix(stage.stage) << "Bindings[] = {\n";
+    os << "constexpr rhi::ShaderBinding " << prefix << "Bindings[] = {\n";
     for (const Binding& b : stage.bindings) {
         os << "    {.name = \"" << escapeLiteral(b.name) << "\",\n"
            << "     .set = " << b.set << ",\n"
@@ -195,9 +196,9 @@ void emitBindings(std::ostringstream& os, const StageOutput& stage) {
     os << "};\n\n";
 }
 
-void emitVertexInputs(std::ostringstream& os, const StageOutput& stage) {
+void emitVertexInputs(std::ostringstream& os, const StageOutput& stage, const std::string& prefix) {
     if (stage.vertexInputs.empty()) return;
-    os << "constexpr rhi::VertexInputReflection " << stagePrefix(stage.stage) << "Inputs[] = {\n";
+    os << "constexpr rhi::VertexInputReflection " << prefix << "Inputs[] = {\n";
     for (const rhi::VertexInputReflection& v : stage.vertexInputs) {
         os << "    {.location = " << v.location << ", .format = " << formatEnum(v.format) << "},\n";
     }
@@ -214,25 +215,207 @@ std::string escapeDepfilePath(const std::string& path) {
     return out;
 }
 
+// "path:line" -> "file:line" (generated code does not depend on where the tree is).
+std::string shortOrigin(const std::string& origin) {
+    const size_t colon = origin.rfind(':');
+    if (colon != std::string::npos && colon + 1 < origin.size() &&
+        origin.find_first_not_of("0123456789", colon + 1) == std::string::npos) {
+        return fileName(origin.substr(0, colon)) + origin.substr(colon);
+    }
+    return fileName(origin);
+}
+
+std::string kindText(const StructLayout& layout) {
+    switch (layout.kind) {
+        case BlockKind::UniformBlock:
+            return "uniform block (set " + std::to_string(layout.set) + ", binding " +
+                   std::to_string(layout.binding) + ", std140 unless declared otherwise)";
+        case BlockKind::PushConstant:
+            return "push-constant block (std430; on OpenGL a std140 uniform block at the same offsets)";
+        case BlockKind::StorageBlock:
+            return "storage block (set " + std::to_string(layout.set) + ", binding " +
+                   std::to_string(layout.binding) + ")";
+        case BlockKind::Struct:
+            return "struct";
+    }
+    return "struct";
+}
+
+// glm headers for the C++ types used by `structs`.
+std::set<std::string> glmHeaders(const std::vector<const StructLayout*>& structs) {
+    std::set<std::string> headers;
+    for (const StructLayout* layout : structs) {
+        for (const StructMember& m : layout->members) {
+            if (m.isStruct || m.cppType.rfind("::glm::", 0) != 0) continue;
+            const std::string type = m.cppType.substr(7);  // vec4, ivec2, mat3x4
+            const size_t vec = type.find("vec");
+            if (vec != std::string::npos) {
+                headers.insert("glm/vec" + type.substr(vec + 3) + ".hpp");
+            } else if (type.find('x') != std::string::npos) {
+                headers.insert("glm/" + type + ".hpp");  // mat3x4
+            } else {
+                headers.insert("glm/" + type + "x" + type.substr(3) + ".hpp");  // mat4 -> mat4x4
+            }
+        }
+    }
+    return headers;
+}
+
+// One parameter struct with explicit padding, then a static_assert for its size and for the
+// offset of every member: a C++ layout that differs from the GLSL one does not compile.
+void emitStruct(std::ostringstream& os, const StructLayout& layout, const std::string& qualifier) {
+    std::set<std::string> names;
+    for (const StructMember& m : layout.members) names.insert(m.name);
+    uint32_t padIndex = 0;
+    auto padName = [&] {
+        std::string name = "_pad" + std::to_string(padIndex++);
+        while (names.count(name)) name += '_';
+        names.insert(name);
+        return name;
+    };
+
+    os << "// " << layout.name << ": " << kindText(layout) << ", declared at " << shortOrigin(layout.origin)
+       << ".\n"
+       << "struct " << layout.name << " {\n";
+    uint32_t at = 0;
+    for (const StructMember& m : layout.members) {
+        if (m.offset > at) {
+            os << "    unsigned char " << padName() << "[" << (m.offset - at) << "]{};  // padding\n";
+        }
+        const std::string type = m.isStruct ? qualifier + m.cppType : m.cppType;
+        os << "    " << type << ' ' << m.name;
+        if (m.arraySize > 0) os << '[' << m.arraySize << ']';
+        os << "{};  // " << m.glslType;
+        if (m.arraySize > 0) os << '[' << m.arraySize << ']';
+        os << ", offset " << m.offset << "\n";
+        at = m.offset + m.size;
+    }
+    if (layout.size > at) {
+        os << "    unsigned char " << padName() << "[" << (layout.size - at) << "]{};  // padding\n";
+    }
+    os << "};\n";
+    os << "static_assert(sizeof(" << layout.name << ") == " << layout.size << ", \"" << layout.name
+       << ": the C++ size differs from the GLSL layout\");\n";
+    os << "static_assert(std::is_standard_layout_v<" << layout.name << "> && std::is_trivially_copyable_v<"
+       << layout.name << ">);\n";
+    for (const StructMember& m : layout.members) {
+        os << "static_assert(offsetof(" << layout.name << ", " << m.name << ") == " << m.offset << ", \""
+           << layout.name << "::" << m.name << ": the C++ offset differs from the GLSL layout\");\n";
+    }
+    os << "\n";
+}
+
+std::string slotLiteral(const Binding& b) {
+    return std::string("{\"") + escapeLiteral(b.name) + "\", " + std::to_string(b.set) + ", " +
+           std::to_string(b.binding) + ", " + bindingTypeEnum(b.type) + ", " + std::to_string(b.count) + "}";
+}
+
+// Stages of variant `v` (0 = Default).
+const std::vector<StageOutput>& variantStages(const ProgramOutput& program, size_t v) {
+    return v == 0 ? program.stages : program.variants[v - 1].stages;
+}
+
+std::string variantName(const ProgramOutput& program, size_t v) {
+    return v == 0 ? "Default" : program.variants[v - 1].name;
+}
+
 }  // namespace
 
 std::string generateHeader(const ProgramOutput& program) {
+    std::vector<const StructLayout*> structs;
+    for (const StructLayout& layout : program.structs) structs.push_back(&layout);
+
     std::ostringstream os;
     os << "// Generated by penumbra-shaderc from";
     for (const StageOutput& s : program.stages) os << ' ' << fileName(s.path);
     os << ". Do not edit.\n"
        << "#pragma once\n\n"
-       << "#include <rhi/types.h>\n\n"
+       << "#include <penumbra/shader_interface.h>\n";
+    if (program.usesView) os << "#include <shaders/view.h>\n";
+    os << "\n";
+    for (const std::string& header : glmHeaders(structs)) os << "#include <" << header << ">\n";
+    os << "#include <cstddef>\n"
+       << "#include <cstdint>\n"
+       << "#include <type_traits>\n\n"
        << "namespace penumbra::shaders::" << program.name << " {\n\n";
-    for (const StageOutput& s : program.stages) {
-        os << "// " << fileName(s.path) << ": SPIR-V, OpenGL GLSL and reflection.\n"
-           << "const rhi::ShaderDesc& " << stageFunction(s.stage) << "();\n";
+
+    const size_t variantCount = program.variants.size() + 1;
+    os << "// Variants (#pragma penumbra_variants); Default is compiled without defines.\n"
+       << "enum class Variant : uint32_t {\n"
+       << "    Default = 0,\n";
+    for (size_t v = 1; v < variantCount; ++v) {
+        const VariantOutput& variant = program.variants[v - 1];
+        os << "    " << variant.name << " = " << v << ",  //";
+        for (const std::string& d : variant.defines) os << ' ' << d;
+        os << " (" << shortOrigin(variant.origin) << ")\n";
     }
+    os << "};\n"
+       << "inline constexpr uint32_t kVariantCount = " << variantCount << ";\n"
+       << "inline constexpr const char* kVariantNames[kVariantCount] = {";
+    for (size_t v = 0; v < variantCount; ++v) os << (v ? ", " : "") << '"' << variantName(program, v) << '"';
+    os << "};\n\n";
+
+    for (const StageOutput& s : program.stages) {
+        os << "// " << fileName(s.path)
+           << ": SPIR-V, OpenGL GLSL and reflection (without an argument: Default).\n"
+           << "const rhi::ShaderDesc& " << stageFunction(s.stage) << "();\n"
+           << "const rhi::ShaderDesc& " << stageFunction(s.stage) << "(Variant variant);\n";
+    }
+    os << "\n";
+
+    if (program.usesView) {
+        os << "// The shared per-view block (set 0, binding 0): declared once in <shaders/view.h>.\n"
+           << "using ::penumbra::shaders::View;\n\n";
+    }
+    const std::string qualifier = "::penumbra::shaders::" + program.name + "::";
+    for (const StructLayout& layout : program.structs) emitStruct(os, layout, qualifier);
+    if (!program.pushConstantStruct.empty()) {
+        os << "// The program's push constants (rhi::ShaderDesc::pushConstantSize bytes are pushed).\n"
+           << "using PushConstants = " << program.pushConstantStruct << ";\n\n";
+    }
+
+    os << "// Named slots: the (set, binding) of every resource of any stage or variant, by its reflected\n"
+       << "// name (block type name for buffers, variable name for textures and images).\n"
+       << "namespace slot {\n";
+    for (const Binding& b : program.slots) {
+        os << "inline constexpr ::penumbra::shaders::SlotRef " << b.name << slotLiteral(b) << ";\n";
+    }
+    os << "}  // namespace slot\n";
     os << "\n}  // namespace penumbra::shaders::" << program.name << "\n";
     return os.str();
 }
 
+std::string generateViewHeader(const StructLayout& view, const std::string& viewGlsl) {
+    std::ostringstream os;
+    os << "// Generated by penumbra-shaderc from " << fileName(viewGlsl) << ". Do not edit.\n"
+       << "#pragma once\n\n"
+       << "#include <penumbra/shader_interface.h>\n\n";
+    for (const std::string& header : glmHeaders({&view})) os << "#include <" << header << ">\n";
+    os << "#include <cstddef>\n"
+       << "#include <cstdint>\n"
+       << "#include <type_traits>\n\n"
+       << "namespace penumbra::shaders {\n\n"
+       << "// The shared per-view/per-frame block: every program that includes " << fileName(viewGlsl)
+       << " has exactly this\n// layout at set " << kViewSet << ", binding " << kViewBinding
+       << " (penumbra-shaderc checks it).\n";
+    emitStruct(os, view, "::penumbra::shaders::");
+    Binding slot;
+    slot.name = kViewBlockName;
+    slot.set = kViewSet;
+    slot.binding = kViewBinding;
+    slot.type = rhi::BindingType::UniformBuffer;
+    os << "inline constexpr ::penumbra::shaders::SlotRef kViewSlot" << slotLiteral(slot) << ";\n\n"
+       << "}  // namespace penumbra::shaders\n";
+    return os.str();
+}
+
 std::string generateSource(const ProgramOutput& program) {
+    const size_t variantCount = program.variants.size() + 1;
+    // Array names: kVertexSpirv for the Default variant, kVertex1Spirv for variant 1, ...
+    auto prefixOf = [](rhi::ShaderStage stage, size_t v) {
+        return std::string(stagePrefix(stage)) + (v == 0 ? "" : std::to_string(v));
+    };
+
     std::ostringstream os;
     os << "// Generated by penumbra-shaderc from";
     for (const StageOutput& s : program.stages) os << ' ' << fileName(s.path);
@@ -243,39 +426,78 @@ std::string generateSource(const ProgramOutput& program) {
        << "#include <string_view>\n\n"
        << "namespace penumbra::shaders::" << program.name << " {\n"
        << "namespace {\n\n";
-    for (const StageOutput& s : program.stages) {
-        emitSpirv(os, s);
-        emitGlsl(os, s);
-        emitBindings(os, s);
-        emitVertexInputs(os, s);
+    // A stage whose code equals an earlier variant's (a define the stage does not use) shares
+    // that variant's arrays: source[v][i] is the variant whose arrays stage i of variant v uses.
+    std::vector<std::vector<size_t>> source(variantCount, std::vector<size_t>(program.stages.size()));
+    for (size_t v = 0; v < variantCount; ++v) {
+        for (size_t i = 0; i < program.stages.size(); ++i) {
+            source[v][i] = v;
+            const StageOutput& s = variantStages(program, v)[i];
+            for (size_t w = 0; w < v; ++w) {
+                const StageOutput& earlier = variantStages(program, w)[i];
+                if (earlier.spirv == s.spirv && earlier.glsl == s.glsl) {
+                    source[v][i] = w;
+                    break;
+                }
+            }
+        }
+    }
+    for (size_t v = 0; v < variantCount; ++v) {
+        if (v > 0) os << "// ---- variant " << variantName(program, v) << " ----\n\n";
+        for (size_t i = 0; i < program.stages.size(); ++i) {
+            const StageOutput& s = variantStages(program, v)[i];
+            const std::string prefix = prefixOf(s.stage, v);
+            if (source[v][i] != v) {
+                os << "// " << fileName(s.path) << ": the same code as variant "
+                   << variantName(program, source[v][i]) << ".\n\n";
+                continue;
+            }
+            emitSpirv(os, s, prefix);
+            emitGlsl(os, s, prefix);
+            emitBindings(os, s, prefix);
+            emitVertexInputs(os, s, prefix);
+        }
     }
     os << "}  // namespace\n";
-    for (const StageOutput& s : program.stages) {
-        const std::string prefix = stagePrefix(s.stage);
-        os << "\nconst rhi::ShaderDesc& " << stageFunction(s.stage) << "() {\n"
-           << "    static const rhi::ShaderDesc desc{\n"
-           << "        .stage = " << stageEnum(s.stage) << ",\n"
-           << "        .spirv = std::span<const uint32_t>(" << prefix << "Spirv),\n"
-           << "        .glsl = std::string_view(" << prefix << "Glsl, sizeof(" << prefix << "Glsl) - 1),\n";
-        if (s.bindings.empty()) {
-            os << "        .bindings = {},\n";
-        } else {
-            os << "        .bindings = std::span<const rhi::ShaderBinding>(" << prefix << "Bindings),\n";
+    for (size_t i = 0; i < program.stages.size(); ++i) {
+        const rhi::ShaderStage stage = program.stages[i].stage;
+        os << "\nconst rhi::ShaderDesc& " << stageFunction(stage) << "(Variant variant) {\n"
+           << "    static const rhi::ShaderDesc descs[kVariantCount] = {\n";
+        for (size_t v = 0; v < variantCount; ++v) {
+            const StageOutput& s = variantStages(program, v)[i];
+            const std::string prefix = prefixOf(stage, source[v][i]);
+            std::string debugName = program.name + "." + detail::stageFileKind(stage);
+            if (v > 0) debugName += "[" + variantName(program, v) + "]";
+            os << "        rhi::ShaderDesc{\n"
+               << "            .stage = " << stageEnum(stage) << ",\n"
+               << "            .spirv = std::span<const uint32_t>(" << prefix << "Spirv),\n"
+               << "            .glsl = std::string_view(" << prefix << "Glsl, sizeof(" << prefix
+               << "Glsl) - 1),\n";
+            if (s.bindings.empty()) {
+                os << "            .bindings = {},\n";
+            } else {
+                os << "            .bindings = std::span<const rhi::ShaderBinding>(" << prefix
+                   << "Bindings),\n";
+            }
+            if (s.vertexInputs.empty()) {
+                os << "            .vertexInputs = {},\n";
+            } else {
+                os << "            .vertexInputs = std::span<const rhi::VertexInputReflection>(" << prefix
+                   << "Inputs),\n";
+            }
+            os << "            .pushConstantSize = " << s.pushConstantSize << ",\n"
+               << "            .workgroupSize = {" << s.workgroupSize[0] << ", " << s.workgroupSize[1] << ", "
+               << s.workgroupSize[2] << "},\n"
+               << "            .debugName = \"" << escapeLiteral(debugName) << "\",\n"
+               << "        },\n";
         }
-        if (s.vertexInputs.empty()) {
-            os << "        .vertexInputs = {},\n";
-        } else {
-            os << "        .vertexInputs = std::span<const rhi::VertexInputReflection>(" << prefix
-               << "Inputs),\n";
-        }
-        os << "        .pushConstantSize = " << s.pushConstantSize << ",\n"
-           << "        .workgroupSize = {" << s.workgroupSize[0] << ", " << s.workgroupSize[1] << ", "
-           << s.workgroupSize[2] << "},\n"
-           << "        .debugName = \"" << escapeLiteral(program.name + "." + detail::stageFileKind(s.stage))
-           << "\",\n"
-           << "    };\n"
-           << "    return desc;\n"
-           << "}\n";
+        os << "    };\n"
+           << "    // An out-of-range value (only possible through a cast) selects Default.\n"
+           << "    const auto index = static_cast<uint32_t>(variant);\n"
+           << "    return descs[index < kVariantCount ? index : 0u];\n"
+           << "}\n\n"
+           << "const rhi::ShaderDesc& " << stageFunction(stage) << "() { return " << stageFunction(stage)
+           << "(Variant::Default); }\n";
     }
     os << "\n}  // namespace penumbra::shaders::" << program.name << "\n";
     return os.str();

@@ -51,12 +51,11 @@ std::string normalizedPath(const fs::path& p) {
 }
 
 // Resolves `#include "x"` against the including file's directory, then the include directories;
-// `#include <x>` against the include directories only. Records every file it opens.
+// `#include <x>` against the include directories only. Records every file it opens in knownNames.
 class FileIncluder final : public glslang::TShader::Includer {
 public:
-    FileIncluder(const std::vector<std::string>& includeDirs, std::set<std::string>& dependencies,
-                 std::vector<std::string>& knownNames)
-        : m_includeDirs(includeDirs), m_dependencies(dependencies), m_knownNames(knownNames) {}
+    FileIncluder(const std::vector<std::string>& includeDirs, std::vector<std::string>& knownNames)
+        : m_includeDirs(includeDirs), m_knownNames(knownNames) {}
 
     IncludeResult* includeLocal(const char* headerName, const char* includerName, size_t depth) override {
         return resolve(headerName, includerName, depth, true);
@@ -96,7 +95,6 @@ private:
                 return fail("cannot read included file " + candidate.string());
             }
             std::string resolved = normalizedPath(candidate);
-            m_dependencies.insert(resolved);
             m_knownNames.push_back(resolved);
             return new IncludeResult(resolved, content->data(), content->size(), content);
         }
@@ -117,7 +115,6 @@ private:
     }
 
     const std::vector<std::string>& m_includeDirs;
-    std::set<std::string>& m_dependencies;
     std::vector<std::string>& m_knownNames;
     std::pair<std::string, std::vector<std::string>> m_localSearch;  // last failed local include
 };
@@ -233,36 +230,47 @@ const char* stageFileKind(rhi::ShaderStage stage) {
 }
 
 bool compileToSpirv(const StageInput& input, const std::vector<std::string>& includeDirs,
-                    std::vector<uint32_t>& spirv, std::set<std::string>& dependencies,
+                    const std::vector<std::string>& defines, const std::string* sourceText,
+                    std::vector<uint32_t>& spirv, std::vector<std::string>& files,
                     std::vector<std::string>& diagnostics) {
     ensureGlslangInitialized();
 
     std::string source;
-    if (!readFile(input.path, source)) {
-        diagnostics.push_back(input.path + ": error: cannot read shader source");
-        return false;
+    if (sourceText) {
+        source = *sourceText;
+    } else {
+        if (!readFile(input.path, source)) {
+            diagnostics.push_back(input.path + ": error: cannot read shader source");
+            return false;
+        }
+        files.push_back(normalizedPath(input.path));
     }
-    dependencies.insert(normalizedPath(input.path));
-
     const EShLanguage language = toLanguage(input.stage);
     glslang::TShader shader(language);
     const char* text = source.c_str();
     const int length = static_cast<int>(source.size());
     const char* name = input.path.c_str();
     shader.setStringsWithLengthsAndNames(&text, &length, &name, 1);
-    shader.setPreamble("#extension GL_GOOGLE_include_directive : require\n");
+    std::string preamble = "#extension GL_GOOGLE_include_directive : require\n";
+    for (const std::string& define : defines) preamble += "#define " + define + " 1\n";
+    shader.setPreamble(preamble.c_str());
     shader.setEntryPoint("main");
     shader.setEnvInput(glslang::EShSourceGlsl, language, glslang::EShClientVulkan, 100);
     shader.setEnvClient(glslang::EShClientVulkan, glslang::EShTargetVulkan_1_3);
     shader.setEnvTarget(glslang::EShTargetSpv, glslang::EShTargetSpv_1_6);
 
     std::vector<std::string> knownNames{input.path};
-    FileIncluder includer(includeDirs, dependencies, knownNames);
+    FileIncluder includer(includeDirs, knownNames);
     const auto messages = static_cast<EShMessages>(EShMsgSpvRules | EShMsgVulkanRules);
     const bool parsed =
         shader.parse(GetDefaultResources(), 450, ECoreProfile, false, false, messages, includer);
     bool sawError = false;
     translateLog(shader.getInfoLog(), knownNames, input.path, diagnostics, sawError);
+    // knownNames[0] is the source as given; the rest are the resolved includes in opening order.
+    for (size_t i = 1; i < knownNames.size(); ++i) {
+        if (std::find(files.begin(), files.end(), knownNames[i]) == files.end())
+            files.push_back(knownNames[i]);
+    }
     if (!parsed) {
         if (!sawError) diagnostics.push_back(input.path + ": error: GLSL compilation failed");
         return false;
