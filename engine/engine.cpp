@@ -75,4 +75,12 @@ app::FrameTime Engine::update(double frameSeconds) {
     return t;
 }
 
+bool Engine::updateOffline(double frameSeconds, app::FrameTime& out, std::string& error) {
+    if (!m_loop.advanceOffline(
+            frameSeconds, [this](double dt) { m_schedule.run(m_scene.world, dt); }, out, error))
+        return false;
+    ecs::updateTransforms(m_scene.world);
+    return true;
+}
+
 }  // namespace penumbra

@@ -7,7 +7,8 @@
 //   auto engine = penumbra::Engine::create({}, error);
 //   if (!engine || !engine->loadScene("scenes/default.json", error)) { ... }
 //   // or build a World in code: engine->world().create(), add<Transform>(), ...
-//   engine->update(1.0 / 60.0);   // fixed-step systems, then transforms
+//   engine->update(1.0 / 60.0);   // real time: fixed-step systems, then transforms
+//   engine->updateOffline(0.1, t, error);  // offline: exactly 0.1 s more simulated time
 //
 // Schedule: every fixed step runs the systems in schedule() (by default "spin" = scene::spinSystem;
 // plugins add theirs through PluginContext::addSystem); after the frame's steps, world transforms
@@ -47,8 +48,14 @@ public:
     // Releases the current scene's assets and starts an empty one (default settings).
     void unloadScene();
 
-    // Runs the fixed steps that fit in `frameSeconds` (see app::AppLoop), then updates transforms.
+    // Real time: runs the fixed steps that fit in the measured `frameSeconds` (app::AppLoop::advance,
+    // with its catch-up cap), then updates transforms.
     app::FrameTime update(double frameSeconds);
+    // Offline: advances by exactly `frameSeconds` (app::AppLoop::advanceOffline: the frame is split
+    // into equal steps no longer than the scene's fixedDt, nothing is dropped, and after k calls
+    // with the same S from time 0 the simulated time is exactly k * S), then updates transforms.
+    // False with `error` for an invalid frame time (nothing changes).
+    bool updateOffline(double frameSeconds, app::FrameTime& out, std::string& error);
 
     scene::Scene& scene() { return m_scene; }
     const scene::Scene& scene() const { return m_scene; }

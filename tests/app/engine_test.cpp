@@ -81,6 +81,40 @@ TEST(Engine, BuildWorldInCodeAndUpdateRunsSpinThenTransforms) {
     EXPECT_NEAR(p.z, -1.0f, 1e-5f);
 }
 
+// Offline frames (penumbra render --fixed-dt): 1 s frames with the default 1/60 s update step run
+// 60 steps each, nothing capped. Criterion: after frame 0 at t = 0 and two frames of 1 s, simTime is
+// exactly 2 and a spin of 90 deg/s has turned 180 deg. Real-time update(1.0) stops at 16 steps
+// (0.267 s) per frame, which is what the CLI used before.
+TEST(Engine, OfflineUpdatesAdvanceExactlyTheFrameTime) {
+    std::string error;
+    auto engine = Engine::create({}, error);
+    ASSERT_TRUE(engine) << error;
+    ecs::World& world = engine->world();
+    ecs::Entity parent = world.create();
+    world.add<ecs::Transform>(parent);
+    world.add<scene::Spin>(parent, scene::Spin{{0, 1, 0}, float(M_PI / 2)});
+    ecs::Entity child = world.create();
+    world.add<ecs::Transform>(child)->position = {1, 0, 0};
+    ASSERT_TRUE(ecs::setParent(world, child, parent));
+
+    app::FrameTime t;
+    ASSERT_TRUE(engine->updateOffline(0.0, t, error)) << error;
+    EXPECT_EQ(t.simTime, 0.0);
+    for (int k = 1; k <= 2; ++k) {
+        ASSERT_TRUE(engine->updateOffline(1.0, t, error)) << error;
+        EXPECT_EQ(t.steps, 60u);
+        EXPECT_EQ(t.simTime, double(k));
+    }
+    EXPECT_EQ(engine->loop().droppedSteps(), 0u);
+    glm::vec3 p = world.get<ecs::Transform>(child)->worldPosition();
+    EXPECT_NEAR(p.x, -1.0f, 1e-4f);
+    EXPECT_NEAR(p.z, 0.0f, 1e-4f);
+
+    EXPECT_FALSE(engine->updateOffline(-1.0, t, error));
+    EXPECT_NE(error.find("offline frame time"), std::string::npos) << error;
+    EXPECT_EQ(engine->loop().simTime(), 2.0);
+}
+
 TEST(Engine, FailedSceneLoadKeepsTheCurrentScene) {
     fs::path dir = tempDir("keep");
     writeFile(dir / "good.json", R"({"version": 1, "entities": [{"name": "cam", "camera": {}}]})");

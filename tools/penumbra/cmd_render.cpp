@@ -63,7 +63,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::Range(1u, 100000u))
         ->capture_default_str();
     cmd->add_option("--fixed-dt", opt.fixedDt,
-                    "Simulated seconds per frame (deterministic time: frame k is rendered at k * dt)")
+                    "Simulated seconds between rendered frames: frame k is rendered at exactly k * dt. Not "
+                    "the scene's render.fixedDt (the update step): each frame runs the fewest equal "
+                    "update steps no longer than render.fixedDt that fill dt")
         ->check(CLI::Range(0.0, 10.0))
         ->capture_default_str();
     cmd->add_option("--camera", opt.camera,
@@ -130,8 +132,12 @@ int runRender(const RenderOptions& opt) {
     std::vector<PassSeries> series;
     app::FrameTime lastTime;
     for (uint32_t frame = 0; frame < opt.frames; ++frame) {
-        // Frame 0 shows the scene at t = 0; every later frame advances by exactly --fixed-dt.
-        lastTime = engine->update(frame == 0 ? 0.0 : opt.fixedDt);
+        // Offline time: frame 0 shows the scene at t = 0, frame k at exactly k * --fixed-dt (each
+        // frame split into equal update steps no longer than the scene's fixedDt; no catch-up cap).
+        if (!engine->updateOffline(frame == 0 ? 0.0 : opt.fixedDt, lastTime, error)) {
+            log::error("{}: frame {}: {}", opt.scene, frame, error);
+            return 1;
+        }
         if (!renderer->renderFrame(*engine, error, opt.camera)) {
             log::error("{}: frame {}: {}", opt.scene, frame, error);
             return 1;
