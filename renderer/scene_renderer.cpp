@@ -6,7 +6,8 @@
 // Frame rules (documented here, tested in tests/renderer/scene_renderer_test.cpp):
 // - Draw order and material indices: visible MeshRenderer entities that have a Transform are drawn
 //   in ascending entity index; materials get indices 0, 1, ... in order of first use in that order
-//   (material id 0 = the default ecs::Material). At most 255 materials per frame (8-bit index).
+//   (material id 0 = the default ecs::Material). At most 65536 materials per frame (the G-buffer's
+//   16-bit index, the scene format's limit).
 //   A MeshRenderer without a Transform is not drawn.
 // - Camera: projection perspectiveRH_ZO(fovY, width / height, near, far) with proj[1][1] negated
 //   (Vulkan clip space, NDC y = -1 is image row 0, depth 0..1); view = inverse of the camera's world
@@ -36,7 +37,7 @@
 namespace penumbra::render {
 namespace {
 
-constexpr uint32_t kMaxMaterialsPerFrame = 255;
+constexpr uint32_t kMaxMaterialsPerFrame = 65536;
 
 enum TargetId : uint32_t { kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kOutput, kTargetCount };
 
@@ -261,9 +262,9 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
     }
     if (materials.size() > kMaxMaterialsPerFrame)
         return fail(
-            fmt::format("more than 255 materials in one frame ({} used by the visible MeshRenderers; the "
-                        "G-buffer stores an 8-bit material index)",
-                        materials.size()));
+            fmt::format("more than {} materials in one frame ({} used by the visible MeshRenderers; "
+                        "the G-buffer stores a 16-bit material index)",
+                        kMaxMaterialsPerFrame, materials.size()));
 
     struct LightSource {
         ecs::Entity entity;

@@ -8,11 +8,14 @@
 //                              written sRGB-encoded into the RGBA8 output
 // A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass).
 //
-// G-buffer (mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
+// G-buffer (after mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
 //   gbuffer.depth     R32_FLOAT    linear view depth in scene units (0 = nothing hit)
 //   gbuffer.normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
-//   gbuffer.material  RGBA8_UNORM  r = material index / 255 (index < 255), g = SSS thickness,
+//   gbuffer.material  RGBA8_UNORM  r, g = 16-bit material index (low, high byte) / 255, so a frame
+//                                  holds up to 65536 materials, the scene format's limit;
 //                                  b = shadow factor, a = ambient occlusion (1 = unoccluded)
+// mTec keeps an 8-bit id and an 8-bit SSS thickness in the r, g bytes; here the id takes both, and
+// subsurface thickness (no pass computes it yet) will need its own target when it arrives.
 // plus, outside the 96 bits (as in mTec: "other buffers"):
 //   gbuffer.velocity  RG16_FLOAT   screen-space motion to the previous frame, in pixels
 //   gbuffer.albedo    RGBA8_SRGB   base colour x texture; only when a material has a base-colour

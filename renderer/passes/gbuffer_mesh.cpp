@@ -155,7 +155,7 @@ uint64_t GBufferMeshPass::add(fg::FrameGraph& graph, const SceneBuffers& scene, 
             };
             clear(d.gb.depth, {0, 0, 0, 0});  // linear depth 0: nothing hit
             clear(d.gb.normal, {0, 0, 0, 0});
-            clear(d.gb.material, {0, 0, 1, 1});  // index 0, no thickness, unshadowed, unoccluded
+            clear(d.gb.material, {0, 0, 1, 1});  // index 0, unshadowed, unoccluded
             clear(d.gb.velocity, {0, 0, 0, 0});
             if (albedo) clear(d.gb.albedo, {0, 0, 0, 0});
             rp.depthAttachment.texture = ctx.texture(d.depth);

@@ -1,6 +1,6 @@
 // Pass "gbuffer_mesh" (Raster): draws every visible MeshRenderer into the deferred G-buffer
 // (renderer/scene_renderer.h documents the layout): linear depth, octahedral normal, packed
-// material (index, thickness 0, shadow 1, AO 1), velocity in pixels and, when some material of the
+// material (16-bit index, shadow 1, AO 1), velocity in pixels and, when some material of the
 // frame has a base-colour texture, albedo. Depth-tested against a transient D32 depth buffer.
 #pragma once
 
@@ -18,7 +18,7 @@ namespace penumbra::render {
 struct GBufferTargets {
     fg::TextureRef depth;     // R32_FLOAT linear view depth
     fg::TextureRef normal;    // RG16_FLOAT octahedral world normal
-    fg::TextureRef material;  // RGBA8_UNORM index / thickness / shadow / AO
+    fg::TextureRef material;  // RGBA8_UNORM index low byte / index high byte / shadow / AO
     fg::TextureRef velocity;  // RG16_FLOAT pixels
     fg::TextureRef albedo;    // RGBA8_SRGB, optional
 };

@@ -1,7 +1,8 @@
 // G-buffer encoding shared by every pass that writes or reads it (renderer/scene_renderer.h):
 //   depth     R32_FLOAT    linear view depth (0 = nothing hit)
 //   normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
-//   material  RGBA8_UNORM  r = material index / 255, g = SSS thickness, b = shadow, a = AO
+//   material  RGBA8_UNORM  r, g = 16-bit material index (low byte, high byte) / 255,
+//                          b = shadow, a = AO
 //   velocity  RG16_FLOAT   pixels moved since the previous frame (current - previous)
 // The C++ octEncode / octDecode (renderer/passes/gbuffer_mesh.cpp) are the same functions.
 
@@ -21,8 +22,10 @@ vec3 octDecode(vec2 e) {
     return normalize(n);
 }
 
-vec4 packMaterial(uint index, float thickness, float shadow, float ao) {
-    return vec4(float(index) / 255.0, thickness, shadow, ao);
+// The material index (< 65536) is split into two UNORM8 bytes; k / 255 stored in UNORM8 reads back
+// as exactly k / 255, so the round trip is exact.
+vec4 packMaterial(uint index, float shadow, float ao) {
+    return vec4(float(index & 255u) / 255.0, float((index >> 8u) & 255u) / 255.0, shadow, ao);
 }
 
-uint unpackMaterialIndex(vec4 m) { return uint(m.r * 255.0 + 0.5); }
+uint unpackMaterialIndex(vec4 m) { return uint(m.r * 255.0 + 0.5) | (uint(m.g * 255.0 + 0.5) << 8u); }

@@ -30,8 +30,8 @@ vec2 clipToPixel(vec4 clip) { return (clip.xy / clip.w * 0.5 + 0.5) * frame.view
 void main() {
     outDepth = vViewDepth;
     outNormal = octEncode(normalize(vNormal));
-    // No SSS thickness for meshes; shadow and AO slots start unoccluded (1).
-    outMaterial = packMaterial(vMaterial, 0.0, 1.0, 1.0);
+    // Shadow and AO slots start unoccluded (1).
+    outMaterial = packMaterial(vMaterial, 1.0, 1.0);
     // A point behind the previous camera has no previous pixel: no motion.
     outVelocity = vPrevClip.w > 1e-6 ? clipToPixel(vClip) - clipToPixel(vPrevClip) : vec2(0.0);
 #ifdef GBUFFER_ALBEDO
