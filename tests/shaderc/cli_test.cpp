@@ -86,7 +86,8 @@ TEST(ShadercCli, UsageErrors) {
 TEST(ShadercCli, HelpDescribesTheOptions) {
     const auto r = runShaderc({"--help"});
     EXPECT_EQ(r.exitCode, 0);
-    for (const char* option : {"--name", "--out-dir", "--comp", "--vert", "--frag", "-I", "--depfile"}) {
+    for (const char* option : {"--name", "--out-dir", "--comp", "--vert", "--frag", "-I", "--depfile",
+                               "--view-glsl", "--view-header"}) {
         EXPECT_TRUE(contains(r.output, option)) << option << "\n" << r.output;
     }
 }

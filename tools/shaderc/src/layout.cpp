@@ -18,7 +18,8 @@ namespace fs = std::filesystem;
 namespace penumbra::shaderc::detail {
 namespace {
 
-// C++ keywords a GLSL identifier may legally be (GLSL itself reserves the others).
+// C++ keywords a GLSL identifier may legally be (GLSL itself reserves the others), and the
+// namespaces and type names the generated code uses unqualified or as its first qualifier.
 bool isCppOnlyKeyword(const std::string& name) {
     static const std::set<std::string> kKeywords = {
         "alignas",       "alignof",     "and",        "and_eq",   "asm",

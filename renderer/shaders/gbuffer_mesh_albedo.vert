@@ -1,2 +1,0 @@
-#version 450
-#include "gbuffer_mesh_vs.glsl"
