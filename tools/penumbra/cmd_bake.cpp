@@ -2,15 +2,16 @@
 // (schema in docs/FORMATS.md).
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <string>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "cli_common.h"
 #include "cmd_sdf.h"
 #include "engine/assets/mesh.h"
 #include "engine/core/log.h"
+#include "engine/core/output_file.h"
 #include "engine/core/progress.h"
 #include "engine/sdf/bake.h"
 #include "engine/sdf/psdf.h"
@@ -135,10 +136,19 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
                        : opt.quality == "high" ? sdf::BakeQuality::High
                                                : sdf::BakeQuality::Medium;
 
+    // Input and outputs are checked before the (possibly long) bake; outputs are written to
+    // temporary files and renamed into place only when everything succeeded.
+    std::string error;
+    if (!checkInputFile(opt.input, "mesh file (.ply, .obj, .gltf or .glb)", error)) {
+        log::error("bake: {}", error);
+        return 1;
+    }
+    OutputFiles outputs;
+    if (!prepareOutputs(outputs, {opt.output, opt.report}, "bake")) return 1;
+
     // load
     Clock::time_point t0 = Clock::now();
     assets::MeshData mesh;
-    std::string error;
     if (!assets::loadMesh(opt.input, mesh, error)) {
         log::error("bake: {}", error);
         return 1;
@@ -174,7 +184,14 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
     wo.nonManifold = diag.nonManifoldEdges > 0;
     wo.boundsMin = diag.boundsMin;
     wo.boundsMax = diag.boundsMax;
-    if (!sdf::writePsdf(opt.output, grid, wo, error)) {
+    if (!outputs.write(
+            opt.output,
+            [&](const std::string& temp, std::string& why) {
+                if (sdf::writePsdf(temp, grid, wo, why)) return true;
+                why = fmt::format("cannot write {}: {}", opt.output, why);
+                return false;
+            },
+            error)) {
         log::error("bake: {}", error);
         return 1;
     }
@@ -244,13 +261,14 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
             {"resolutionSource", resolutionSource},
             {"automaticResolution", sdf::automaticResolution(diag, settings.quality)},
         };
-        std::ofstream out(opt.report);
-        out << j.dump(2) << "\n";
-        out.close();
-        if (!out) {
-            log::error("bake: {}: cannot write the report", opt.report);
+        if (!outputs.writeText(opt.report, j.dump(2) + "\n", error)) {
+            log::error("bake: {}", error);
             return 1;
         }
+    }
+    if (!outputs.commit(error)) {
+        log::error("bake: {}", error);
+        return 1;
     }
 
     if (opt.quiet) return 0;

@@ -3,14 +3,14 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <filesystem>
-#include <fstream>
 #include <vector>
 
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "cli_common.h"
 #include "engine/core/log.h"
+#include "engine/core/output_file.h"
 #include "engine/ecs/components.h"
 #include "engine/engine.h"
 #include "engine/image/image.h"
@@ -48,17 +48,17 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         "render",
         "Render a scene (.json scene file, .gltf or .glb) to a PNG and print per-pass GPU/CPU times");
     cmd->add_option("scene", opt.scene, "Scene file: .json (docs/FORMATS.md), .gltf or .glb")->required();
-    cmd->add_option("-o,--output", opt.output, "Output PNG path")->capture_default_str();
-    cmd->add_option("--backend", opt.backend,
-                    "Graphics backend: vulkan | gl (default: $PENUMBRA_BACKEND, else auto)")
-        ->check(CLI::IsMember({"vulkan", "vk", "gl", "opengl", "auto"}, CLI::ignore_case));
+    cmd->add_option("-o,--output", opt.output, "Output PNG path (.png)")->capture_default_str();
+    addBackendOption(cmd, opt.backend);
     cmd->add_flag(
         "--validation", opt.validation,
         "Enable RHI validation and the Vulkan validation layer / GL debug output (errors fail the run)");
-    cmd->add_option("--width", opt.width, "Image width in pixels (default: the scene's render.width)")
-        ->check(CLI::Range(1u, 8192u));
-    cmd->add_option("--height", opt.height, "Image height in pixels (default: the scene's render.height)")
-        ->check(CLI::Range(1u, 8192u));
+    addSizeOption(cmd, "--width", opt.width,
+                  "Image width in pixels, 1 .. the device's max 2D texture size (default: the scene's "
+                  "render.width)");
+    addSizeOption(cmd, "--height", opt.height,
+                  "Image height in pixels, 1 .. the device's max 2D texture size (default: the scene's "
+                  "render.height)");
     cmd->add_option("--frames", opt.frames, "Number of frames to run; the last one is written")
         ->check(CLI::Range(1u, 100000u))
         ->capture_default_str();
@@ -87,11 +87,31 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
 }
 
 int runRender(const RenderOptions& opt) {
+    // Everything that can be checked before the work is checked first: backend, input, outputs.
+    std::string error;
+    RendererDesc rendererDesc;
+    rendererDesc.validation = opt.validation;
+    rendererDesc.width = opt.width;
+    rendererDesc.height = opt.height;
+    if (!chooseBackend(opt.backend, "render", rendererDesc.backend, error)) {
+        log::error("{}", error);
+        return 2;
+    }
+    if (!checkPngPath(opt.output, "-o", error)) {
+        log::error("render: {}", error);
+        return 2;
+    }
+    if (!checkInputFile(opt.scene, "scene file (.json, .gltf or .glb)", error)) {
+        log::error("render: {}", error);
+        return 1;
+    }
+    OutputFiles outputs;
+    if (!prepareOutputs(outputs, {opt.output, opt.stats, opt.graphviz}, "render")) return 1;
+
     EngineDesc engineDesc;
     engineDesc.cacheDir =
         opt.noCache ? std::string() : (opt.cacheDir.empty() ? defaultCacheDir() : opt.cacheDir);
     engineDesc.pluginDir = opt.pluginDir;
-    std::string error;
     std::unique_ptr<Engine> engine = Engine::create(engineDesc, error);
     if (!engine) {
         log::error("{}", error);
@@ -109,14 +129,6 @@ int runRender(const RenderOptions& opt) {
         return 1;
     }
 
-    RendererDesc rendererDesc;
-    rendererDesc.validation = opt.validation;
-    rendererDesc.width = opt.width;
-    rendererDesc.height = opt.height;
-    if (!opt.backend.empty() && !rhi::parseBackend(opt.backend, rendererDesc.backend)) {
-        log::error("unknown backend '{}'", opt.backend);
-        return 2;
-    }
     std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
     if (!renderer) {
         log::error("{}", error);
@@ -125,6 +137,17 @@ int runRender(const RenderOptions& opt) {
     const rhi::DeviceInfo& info = renderer->device().info();
     const uint32_t width = opt.width ? opt.width : settings.width;
     const uint32_t height = opt.height ? opt.height : settings.height;
+    // One size limit: the device's maximum 2D texture size, whether the size comes from the flags
+    // or from the scene (whose format allows up to 16384, docs/FORMATS.md).
+    const std::string sizeSource = opt.width && opt.height ? "--width/--height"
+                                   : opt.width  ? std::string("--width and the scene's render.height")
+                                   : opt.height ? std::string("the scene's render.width and --height")
+                                                : fmt::format("{}: render.width/height", opt.scene);
+    if (!refuseNullDevice(renderer->device(), "render", error) ||
+        !checkImageSize(width, height, renderer->device(), sizeSource, error)) {
+        log::error("render: {}", error);
+        return opt.width || opt.height ? 2 : 1;
+    }
     fmt::print("penumbra render: {} on {} ({}), {}x{}, {} frame(s) of {:.6g} s\n",
                rhi::toString(info.backend), info.deviceName, info.platform, width, height, opt.frames,
                opt.fixedDt);
@@ -158,8 +181,8 @@ int runRender(const RenderOptions& opt) {
         log::error("reading back the frame failed: {}", error);
         return 1;
     }
-    if (!writePng(opt.output, image, &error)) {
-        log::error("{}", error);
+    if (!writePngOutput(outputs, opt.output, image, error)) {
+        log::error("render: {}", error);
         return 1;
     }
 
@@ -219,31 +242,27 @@ int runRender(const RenderOptions& opt) {
                            {"misses", assets.cacheStats().misses},
                            {"writes", assets.cacheStats().writes},
                            {"rejected", assets.cacheStats().rejected}};
-        std::error_code ec;
-        const std::filesystem::path statsPath(opt.stats);
-        if (statsPath.has_parent_path()) std::filesystem::create_directories(statsPath.parent_path(), ec);
-        std::ofstream f(opt.stats);
-        f << j.dump(2) << "\n";
-        if (!f) {
-            log::error("{}: cannot write the statistics file", opt.stats);
+        if (!outputs.writeText(opt.stats, j.dump(2) + "\n", error)) {
+            log::error("render: {}", error);
             return 1;
         }
     }
-    if (!opt.graphviz.empty()) {
-        std::ofstream dot(opt.graphviz);
-        dot << renderer->frameGraphviz();
-        if (!dot) {
-            log::error("{}: cannot write the frame-graph dump", opt.graphviz);
-            return 1;
-        }
+    if (!opt.graphviz.empty() && !outputs.writeText(opt.graphviz, renderer->frameGraphviz(), error)) {
+        log::error("render: {}", error);
+        return 1;
     }
     fmt::print("entities {}, draw calls {}, triangles {}, GPU memory {:.2f} MiB\n", world.aliveCount(),
                stats.drawCalls, stats.triangles, double(stats.memory.total()) / (1024.0 * 1024.0));
-    fmt::print("wrote {}\n", opt.output);
+    // A run with validation errors failed: its outputs are not kept.
     if (opt.validation && renderer->validationErrors() != 0) {
-        log::error("{} validation error(s) reported", renderer->validationErrors());
+        log::error("{} validation error(s) reported; no output written", renderer->validationErrors());
         return 1;
     }
+    if (!outputs.commit(error)) {
+        log::error("render: {}", error);
+        return 1;
+    }
+    fmt::print("wrote {}\n", opt.output);
     return 0;
 }
 

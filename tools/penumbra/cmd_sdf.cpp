@@ -2,6 +2,7 @@
 // coordinates (trilinear inside the grid, the conservative outside rule of docs/FORMATS.md beyond).
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -10,6 +11,7 @@
 
 #include <fmt/format.h>
 
+#include "cli_common.h"
 #include "cmd_sdf.h"
 #include "engine/core/log.h"
 #include "engine/sdf/psdf.h"
@@ -29,18 +31,20 @@ bool parseNumber(std::string_view token, double& out) {
     return r.ec == std::errc() && r.ptr == last && std::isfinite(out);
 }
 
-// Reads "x y z" lines; blank lines and lines starting with '#' are skipped.
+// Reads "x y z" lines (separated by spaces, tabs or commas). Blank lines and comments ('#' to the
+// end of the line, whole-line or trailing) are skipped. A bad line does not stop the reading: its
+// "name:line: ..." message is added to `badLines` and the good points are still returned.
+// Returns false only when the stream itself fails.
 bool readPoints(std::istream& in, const std::string& name, std::vector<glm::dvec3>& points,
-                std::string& error) {
+                std::vector<std::string>& badLines, std::string& error) {
     std::string line;
     size_t lineNo = 0;
     while (std::getline(in, line)) {
         ++lineNo;
         if (!line.empty() && line.back() == '\r') line.pop_back();
-        const size_t firstNonSpace = line.find_first_not_of(" \t");
-        if (firstNonSpace == std::string::npos || line[firstNonSpace] == '#') continue;
-        std::vector<std::string_view> tokens;
         std::string_view rest(line);
+        if (const size_t hash = rest.find('#'); hash != std::string_view::npos) rest = rest.substr(0, hash);
+        std::vector<std::string_view> tokens;
         while (!rest.empty()) {
             const size_t b = rest.find_first_not_of(" \t,");
             if (b == std::string_view::npos) break;
@@ -49,13 +53,14 @@ bool readPoints(std::istream& in, const std::string& name, std::vector<glm::dvec
             tokens.push_back(rest.substr(0, e));
             rest.remove_prefix(e == std::string_view::npos ? rest.size() : e);
         }
+        if (tokens.empty()) continue;  // blank or comment only
         glm::dvec3 p;
         bool ok = tokens.size() == 3;
         for (size_t i = 0; ok && i < 3; ++i) ok = parseNumber(tokens[i], p[int(i)]);
         if (!ok) {
-            error = fmt::format("{}:{}: expected three finite numbers 'x y z', got '{}'", name, lineNo,
-                                line.size() > 80 ? line.substr(0, 77) + "..." : line);
-            return false;
+            badLines.push_back(fmt::format("{}:{}: expected three finite numbers 'x y z', got '{}'", name,
+                                           lineNo, line.size() > 80 ? line.substr(0, 77) + "..." : line));
+            continue;
         }
         points.push_back(p);
     }
@@ -79,8 +84,10 @@ CLI::App* addSdfCommand(CLI::App& app, SdfInfoOptions& info, SdfSampleOptions& s
         "Print the distance at each point of a text file (one 'x y z' per line, in the source "
         "mesh's coordinates): trilinear inside the grid, conservative outside");
     s->add_option("file", sample.file, ".psdf file")->required();
-    s->add_option("--points", sample.points,
-                  "Text file with one 'x y z' per line ('#' comments and blank lines are skipped); - = stdin")
+    s->add_option(
+         "--points", sample.points,
+         "Text file with one 'x y z' per line ('#' starts a comment; blank lines are skipped); - = "
+         "stdin. A bad line is reported with its number and fails the run; the good ones are printed")
         ->required();
     *infoCmd = i;
     *sampleCmd = s;
@@ -90,7 +97,7 @@ CLI::App* addSdfCommand(CLI::App& app, SdfInfoOptions& info, SdfSampleOptions& s
 int runSdfInfo(const SdfInfoOptions& opt) {
     sdf::PsdfAsset asset;
     std::string error;
-    if (!sdf::readPsdf(opt.file, asset, error)) {
+    if (!checkInputFile(opt.file, ".psdf file", error) || !sdf::readPsdf(opt.file, asset, error)) {
         log::error("{}", error);
         return 1;
     }
@@ -132,33 +139,47 @@ int runSdfInfo(const SdfInfoOptions& opt) {
 int runSdfSample(const SdfSampleOptions& opt) {
     sdf::PsdfAsset asset;
     std::string error;
-    if (!sdf::readPsdf(opt.file, asset, error)) {
+    if (!checkInputFile(opt.file, ".psdf file", error) || !sdf::readPsdf(opt.file, asset, error)) {
         log::error("{}", error);
         return 1;
     }
+    const std::string pointsName = opt.points == "-" ? std::string("<stdin>") : opt.points;
     std::vector<glm::dvec3> points;
+    std::vector<std::string> badLines;
+    bool read = false;
     if (opt.points == "-") {
-        if (!readPoints(std::cin, "<stdin>", points, error)) {
+        read = readPoints(std::cin, pointsName, points, badLines, error);
+    } else {
+        if (!checkInputFile(opt.points, "points file", error)) {
             log::error("{}", error);
             return 1;
         }
-    } else {
         std::ifstream in(opt.points);
         if (!in) {
             log::error("{}: cannot open the points file", opt.points);
             return 1;
         }
-        if (!readPoints(in, opt.points, points, error)) {
-            log::error("{}", error);
-            return 1;
-        }
+        read = readPoints(in, opt.points, points, badLines, error);
     }
     const sdf::SdfSampler sampler(asset);
     std::string out;
     out.reserve(points.size() * 16);
     for (const glm::dvec3& p : points) fmt::format_to(std::back_inserter(out), "{:.9g}\n", sampler.sample(p));
     fmt::print("{}", out);
-    return 0;
+    std::fflush(stdout);
+    // The good points are printed; the bad lines are reported (the first 20) and fail the run.
+    constexpr size_t kMaxReported = 20;
+    for (size_t i = 0; i < badLines.size() && i < kMaxReported; ++i) log::error("{}", badLines[i]);
+    if (badLines.size() > kMaxReported)
+        log::error("{}: {} more bad lines not shown", pointsName, badLines.size() - kMaxReported);
+    if (!badLines.empty())
+        log::error("{}: {} bad line(s) skipped; {} point(s) sampled", pointsName, badLines.size(),
+                   points.size());
+    if (!read) {
+        log::error("{}", error);
+        return 1;
+    }
+    return badLines.empty() ? 0 : 1;
 }
 
 }  // namespace penumbra::cli

@@ -4,19 +4,23 @@
 //   penumbra demo -o out.png [--backend] [--width --height]   the RHI demo frame + timing table
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
+// Global flags (-v, --version, --help) are accepted before or after the subcommand. Every command
+// checks its inputs, outputs, backend and image size before the work and writes its outputs all or
+// nothing (cli_common.h, engine/core/output_file.h).
 // Exit codes: 0 ok, 1 runtime error, 2 usage error.
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <fstream>
 #include <string>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "cli_common.h"
 #include "cmd_render.h"
 #include "cmd_sdf.h"
 #include "engine/core/log.h"
+#include "engine/core/output_file.h"
 #include "engine/image/image.h"
 #include "renderer/demo/rhi_demo.h"
 #include "renderer/renderer.h"
@@ -30,21 +34,18 @@ struct DeviceOptions {
 };
 
 void addDeviceOptions(CLI::App* cmd, DeviceOptions& opt) {
-    cmd->add_option("--backend", opt.backend,
-                    "Graphics backend: vulkan | gl (default: $PENUMBRA_BACKEND, else auto)")
-        ->check(CLI::IsMember({"vulkan", "vk", "gl", "opengl", "auto"}, CLI::ignore_case));
+    penumbra::cli::addBackendOption(cmd, opt.backend);
     cmd->add_flag("--validation", opt.validation,
                   "Enable RHI validation and the Vulkan validation layer / GL debug output");
 }
 
-std::unique_ptr<rhi::Device> openDevice(const DeviceOptions& opt) {
+// `backend` comes from --backend / $PENUMBRA_BACKEND (penumbra::cli::chooseBackend for commands
+// that produce images, which refuses the null backend).
+std::unique_ptr<rhi::Device> openDevice(const DeviceOptions& opt, rhi::Backend backend) {
     rhi::DeviceDesc desc;
     desc.headless = true;
     desc.validation = opt.validation;
-    if (!opt.backend.empty() && !rhi::parseBackend(opt.backend, desc.backend)) {
-        penumbra::log::error("unknown backend '{}'", opt.backend);
-        return nullptr;
-    }
+    desc.backend = backend;
     desc.log = penumbra::engineLogCallback();
     auto device = rhi::createDevice(desc);
     if (!device)
@@ -54,7 +55,12 @@ std::unique_ptr<rhi::Device> openDevice(const DeviceOptions& opt) {
 }
 
 int runInfo(const DeviceOptions& opt) {
-    auto device = openDevice(opt);
+    rhi::Backend backend = rhi::Backend::Auto;
+    if (!opt.backend.empty() && !rhi::parseBackend(opt.backend, backend)) {
+        penumbra::log::error("unknown backend '{}'", opt.backend);
+        return 2;
+    }
+    auto device = openDevice(opt, backend);
     if (!device) return 1;
     const rhi::DeviceInfo& info = device->info();
     const rhi::DeviceLimits& l = info.limits;
@@ -76,6 +82,13 @@ int runInfo(const DeviceOptions& opt) {
                l.maxBindGroups, l.maxColorTargets);
     fmt::print("  timestamps       {} (period {} ns)\n", l.timestamps ? "yes" : "no", l.timestampPeriodNs);
     fmt::print("  conservative depth {}\n", l.conservativeDepth ? "yes" : "no");
+    fmt::print("  subgroups        size {}, ops {}\n", l.subgroupSize, rhi::toString(l.subgroupOps));
+    fmt::print("enabled features   {}\n",
+               info.enabledFeatures.empty() ? "none" : fmt::format("{}", fmt::join(info.enabledFeatures, " ")));
+    fmt::print("formats\n");
+    for (uint32_t f = 1; f < uint32_t(rhi::Format::Count); ++f)
+        fmt::print("  {:<16} {}\n", rhi::formatInfo(rhi::Format(f)).name,
+                   rhi::toString(device->formatSupport(rhi::Format(f))));
     return 0;
 }
 
@@ -92,8 +105,26 @@ void printTimings(const std::vector<penumbra::fg::PassTiming>& timings) {
 
 int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width, uint32_t height,
             const std::string& graphvizPath) {
-    auto device = openDevice(opt);
+    // Everything that can be checked is checked before the frame is rendered.
+    std::string err;
+    rhi::Backend backend;
+    if (!penumbra::cli::chooseBackend(opt.backend, "demo", backend, err)) {
+        penumbra::log::error("{}", err);
+        return 2;
+    }
+    if (!penumbra::cli::checkPngPath(output, "-o", err)) {
+        penumbra::log::error("demo: {}", err);
+        return 2;
+    }
+    penumbra::OutputFiles outputs;
+    if (!penumbra::cli::prepareOutputs(outputs, {output, graphvizPath}, "demo")) return 1;
+    auto device = openDevice(opt, backend);
     if (!device) return 1;
+    if (!penumbra::cli::refuseNullDevice(*device, "demo", err) ||
+        !penumbra::cli::checkImageSize(width, height, *device, "demo: --width/--height", err)) {
+        penumbra::log::error("{}", err);
+        return 2;
+    }
     const rhi::DeviceInfo& info = device->info();
     fmt::print("penumbra demo: {} on {} ({}), {}x{}\n", rhi::toString(info.backend), info.deviceName,
                info.platform, width, height);
@@ -105,25 +136,23 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
         penumbra::log::error("demo frame failed: {}", r.error);
         return 1;
     }
-    std::string err;
-    if (!penumbra::writePng(output, r.image, &err)) {
-        penumbra::log::error("{}", err);
+    if (!penumbra::cli::writePngOutput(outputs, output, r.image, err) ||
+        (!graphvizPath.empty() && !outputs.writeText(graphvizPath, r.graphviz, err))) {
+        penumbra::log::error("demo: {}", err);
         return 1;
-    }
-    if (!graphvizPath.empty()) {
-        std::ofstream dot(graphvizPath);
-        dot << r.graphviz;
-        if (!dot) {
-            penumbra::log::error("{}: cannot write the frame-graph dump", graphvizPath);
-            return 1;
-        }
     }
     printTimings(r.timings);
-    fmt::print("wrote {}\n", output);
+    // A run with validation errors failed: its outputs are not kept.
     if (opt.validation && rhi::validationErrorCount(*device) != 0) {
-        penumbra::log::error("{} validation error(s) reported", rhi::validationErrorCount(*device));
+        penumbra::log::error("{} validation error(s) reported; no output written",
+                             rhi::validationErrorCount(*device));
         return 1;
     }
+    if (!outputs.commit(err)) {
+        penumbra::log::error("demo: {}", err);
+        return 1;
+    }
+    fmt::print("wrote {}\n", output);
     return 0;
 }
 
@@ -132,6 +161,11 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
 int main(int argc, char** argv) {
     CLI::App app{"penumbra — signed-distance-field rendering module: command-line front end"};
     app.require_subcommand(1);
+    // Subcommands created below inherit this: options they do not know (the global -v) are handed
+    // to the parent, so `penumbra render scene.json -v` works like `penumbra -v render scene.json`.
+    app.fallthrough();
+    app.set_version_flag("--version", std::string("penumbra ") + PENUMBRA_VERSION,
+                         "Print the version and exit");
     bool verbose = false;
     app.add_flag("-v,--verbose", verbose, "Also print informational and debug messages from the device");
 
@@ -145,12 +179,12 @@ int main(int argc, char** argv) {
     auto* demo =
         app.add_subcommand("demo", "Render the RHI demo frame to a PNG and print per-pass GPU times");
     addDeviceOptions(demo, demoOpt);
-    demo->add_option("-o,--output", output, "Output PNG path")->capture_default_str();
-    demo->add_option("--width", width, "Image width in pixels")
-        ->check(CLI::Range(1u, 8192u))
+    demo->add_option("-o,--output", output, "Output PNG path (.png)")->capture_default_str();
+    penumbra::cli::addSizeOption(demo, "--width", width,
+                                 "Image width in pixels (1 .. device max 2D texture size)")
         ->capture_default_str();
-    demo->add_option("--height", height, "Image height in pixels")
-        ->check(CLI::Range(1u, 8192u))
+    penumbra::cli::addSizeOption(demo, "--height", height,
+                                 "Image height in pixels (1 .. device max 2D texture size)")
         ->capture_default_str();
     demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
 

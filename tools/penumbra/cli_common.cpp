@@ -1,0 +1,163 @@
+#include "cli_common.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <limits>
+
+#include <fmt/format.h>
+
+#include "engine/core/log.h"
+
+namespace penumbra::cli {
+
+namespace {
+
+const char* kNullBackendReason =
+    "the null backend records commands but executes none, so the output would be blank; use vulkan or gl";
+
+}  // namespace
+
+CLI::Option* addBackendOption(CLI::App* cmd, std::string& backend) {
+    return cmd
+        ->add_option("--backend", backend,
+                     "Graphics backend: vulkan | gl (default: $PENUMBRA_BACKEND, else auto)")
+        ->check(CLI::Validator(
+            [](std::string& value) -> std::string {
+                rhi::Backend b;
+                if (!rhi::parseBackend(value, b))
+                    return fmt::format("'{}' is not a backend (allowed: vulkan, vk, gl, opengl, auto)",
+                                       value);
+                if (b == rhi::Backend::Null) return kNullBackendReason;
+                return {};
+            },
+            "vulkan|gl|auto"));
+}
+
+CLI::Option* addSizeOption(CLI::App* cmd, const std::string& name, uint32_t& value, const std::string& help) {
+    return cmd->add_option(name, value, help)
+        ->check(CLI::Validator(
+            [name](std::string& text) -> std::string {
+                uint64_t n = 0;
+                bool ok = !text.empty() && text.size() <= 10;
+                for (char c : text) ok = ok && std::isdigit(static_cast<unsigned char>(c));
+                if (ok) n = std::strtoull(text.c_str(), nullptr, 10);
+                if (ok && n >= 1 && n <= std::numeric_limits<uint32_t>::max()) return {};
+                return fmt::format(
+                    "'{}' is not allowed: {} takes a whole number of pixels from 1 to the device's maximum "
+                    "2D texture size (`penumbra info` prints it)",
+                    text, name);
+            },
+            "1..device max"));
+}
+
+bool chooseBackend(const std::string& flag, const char* command, rhi::Backend& out, std::string& error) {
+    out = rhi::Backend::Auto;
+    if (!flag.empty()) {
+        if (!rhi::parseBackend(flag, out)) {
+            error = fmt::format("{}: unknown backend '{}'", command, flag);
+            return false;
+        }
+        if (out == rhi::Backend::Null) {
+            error = fmt::format("{}: --backend null: {}", command, kNullBackendReason);
+            return false;
+        }
+        return true;
+    }
+    const char* env = std::getenv("PENUMBRA_BACKEND");
+    rhi::Backend fromEnv;
+    if (env && *env && rhi::parseBackend(env, fromEnv) && fromEnv == rhi::Backend::Null) {
+        error = fmt::format("{}: PENUMBRA_BACKEND=null: {} (unset it or pass --backend)", command,
+                            kNullBackendReason);
+        return false;
+    }
+    return true;  // Auto: createDevice applies $PENUMBRA_BACKEND (or warns about a bad value)
+}
+
+bool refuseNullDevice(const rhi::Device& device, const char* command, std::string& error) {
+    if (device.info().backend != rhi::Backend::Null) return true;
+    error = fmt::format("{}: {}", command, kNullBackendReason);
+    return false;
+}
+
+bool checkImageSize(uint32_t width, uint32_t height, const rhi::Device& device, const std::string& source,
+                    std::string& error) {
+    const rhi::DeviceInfo& info = device.info();
+    const uint32_t maxSize = info.limits.maxTextureSize2D;
+    if (width >= 1 && height >= 1 && width <= maxSize && height <= maxSize) return true;
+    error = fmt::format(
+        "{} {}x{} is outside what the device can render: each side must be from 1 to the device's maximum 2D "
+        "texture size {} ({} on {})",
+        source, width, height, maxSize, rhi::toString(info.backend), info.deviceName);
+    return false;
+}
+
+bool checkInputFile(const std::string& path, const std::string& what, std::string& error) {
+    struct stat st {};
+    if (::stat(path.c_str(), &st) != 0) {
+        error = fmt::format("{}: {}", path, std::strerror(errno));
+        return false;
+    }
+    if (S_ISDIR(st.st_mode)) {
+        error = fmt::format("{} is a directory, not a {}", path, what);
+        return false;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        error = fmt::format("{} is not a regular file (expected a {})", path, what);
+        return false;
+    }
+    const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) {
+        error = fmt::format("{}: cannot open: {}", path, std::strerror(errno));
+        return false;
+    }
+    ::close(fd);
+    return true;
+}
+
+bool checkPngPath(const std::string& path, const std::string& option, std::string& error) {
+    std::string ext = std::filesystem::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
+    if (ext == ".png") return true;
+    error = fmt::format(
+        "{} {}: {}: penumbra writes PNG images only, so the file name must end in .png", option, path,
+        ext.empty()
+            ? std::string("the file name has no extension")
+            : fmt::format("unknown image extension '{}'", std::filesystem::path(path).extension().string()));
+    return false;
+}
+
+bool writePngOutput(OutputFiles& outputs, const std::string& path, const ImageRGBA8& image,
+                    std::string& error) {
+    return outputs.write(
+        path,
+        [&](const std::string& temp, std::string& why) {
+            std::string pngError;
+            if (writePng(temp, image, &pngError)) return true;
+            why = fmt::format("cannot write {}: {}", path, pngError);
+            return false;
+        },
+        error);
+}
+
+bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths, const char* command) {
+    std::string error;
+    for (const std::string& path : paths) {
+        if (path.empty()) continue;
+        if (!outputs.add(path, error)) {
+            log::error("{}: {}", command, error);
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace penumbra::cli

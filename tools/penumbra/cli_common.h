@@ -1,0 +1,54 @@
+// Checks shared by the penumbra subcommands, so that every command validates its inputs, outputs,
+// backend and image size the same way and before any work:
+//   - input files: exist, are regular files and can be opened (a folder is named as a folder);
+//   - outputs: engine/core/output_file.h (temporary file + rename, all or nothing); images: PNG only;
+//   - backend: --backend / $PENUMBRA_BACKEND; the null backend (executes nothing) is refused;
+//   - image size: --width/--height are 1 .. the device's maximum 2D texture size.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "engine/core/output_file.h"
+#include "engine/image/image.h"
+#include "rhi/device.h"
+
+namespace penumbra::cli {
+
+// Adds "--backend" (vulkan | vk | gl | opengl | auto; "null" is refused with the reason).
+CLI::Option* addBackendOption(CLI::App* cmd, std::string& backend);
+
+// Adds --width or --height: a whole number of pixels >= 1; the upper bound is the device's
+// maximum 2D texture size, checked by checkImageSize() once the device is open.
+CLI::Option* addSizeOption(CLI::App* cmd, const std::string& name, uint32_t& value, const std::string& help);
+
+// The backend a command will use: --backend if given, else $PENUMBRA_BACKEND, else auto. Refuses
+// the null backend, which records commands but executes none (the image would be blank):
+// `command` names the subcommand in the message.
+bool chooseBackend(const std::string& flag, const char* command, rhi::Backend& out, std::string& error);
+// The same check on an opened device (in case the backend was chosen some other way).
+bool refuseNullDevice(const rhi::Device& device, const char* command, std::string& error);
+
+// Width and height against the device's maximum 2D texture size; `source` says where the values
+// come from (e.g. "--width/--height" or "the scene's render.width/height").
+bool checkImageSize(uint32_t width, uint32_t height, const rhi::Device& device, const std::string& source,
+                    std::string& error);
+
+// An input file that must exist and be readable; `what` names what it should be ("scene file").
+bool checkInputFile(const std::string& path, const std::string& what, std::string& error);
+
+// Image outputs are PNG: refuses other extensions (".jpg" would silently get PNG data).
+bool checkPngPath(const std::string& path, const std::string& option, std::string& error);
+
+// Writes `image` as PNG to the temporary file of the output `path` (added to `outputs` before).
+bool writePngOutput(OutputFiles& outputs, const std::string& path, const ImageRGBA8& image,
+                    std::string& error);
+
+// The validation step of every command: each non-empty path is added to `outputs` (folders
+// created, a temporary file next to each destination). Logs the error and returns false.
+bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths, const char* command);
+
+}  // namespace penumbra::cli
