@@ -40,8 +40,10 @@ uint32_t readU32(const char* p) {
     return v;  // GLB is little-endian, as is every platform this builds on
 }
 
+// binLength: the BIN chunk's length, or -1 when the container has none.
 bool checkGlbContainer(const std::string& path, const detail::FileBytes& bytes, std::string_view& json,
-                       std::string& error) {
+                       int64_t& binLength, std::string& error) {
+    binLength = -1;
     const size_t size = bytes.size();
     if (size < 12 || readU32(bytes.data()) != kGlbMagic) {
         error = fmt::format("{}: not a GLB file (bad magic, expected 'glTF')", path);
@@ -79,15 +81,51 @@ bool checkGlbContainer(const std::string& path, const detail::FileBytes& bytes, 
             error = fmt::format("{}: invalid GLB: truncated chunk header after the JSON chunk", path);
             return false;
         }
-        const uint32_t binLength = readU32(bytes.data() + binStart);
+        const uint32_t chunkLength = readU32(bytes.data() + binStart);
         const uint32_t binType = readU32(bytes.data() + binStart + 4);
-        if (binType == kChunkBin && binLength > left - 8) {
+        if (binType == kChunkBin && chunkLength > left - 8) {
             error = fmt::format("{}: invalid GLB: BIN chunk length {} exceeds the file (truncated file?)",
-                                path, binLength);
+                                path, chunkLength);
             return false;
+        }
+        if (binType == kChunkBin) {
+            binLength = chunkLength;
         }
     }
     json = std::string_view(bytes.data() + 20, jsonLength);
+    return true;
+}
+
+// A GLB's buffer 0 without a uri is the BIN chunk: its byteLength must be an integer from 1 (the
+// schema's minimum) to the chunk's length, and the chunk must exist. Checked here because tinygltf
+// answers some of these cases with its internal exceptions (e.g. "vector::_M_range_check").
+bool checkGlbBuffer(const std::string& path, const nlohmann::json& doc, int64_t binLength,
+                    std::string& error) {
+    const auto buffers = doc.find("buffers");
+    if (buffers == doc.end() || !buffers->is_array() || buffers->empty() || !(*buffers)[0].is_object() ||
+        (*buffers)[0].contains("uri")) {
+        return true;
+    }
+    const nlohmann::json& buffer = (*buffers)[0];
+    if (binLength < 0) {
+        error = fmt::format(
+            "{}: invalid GLB: buffer 0 has no uri, so it is the BIN chunk, but the file has none", path);
+        return false;
+    }
+    const auto length = buffer.find("byteLength");
+    if (length == buffer.end() || !length->is_number_integer()) {
+        error = fmt::format("{}: invalid GLB: buffer 0 (the BIN chunk) has no integer byteLength", path);
+        return false;
+    }
+    if (!length->is_number_unsigned() || length->get<uint64_t>() == 0 ||
+        length->get<uint64_t>() > uint64_t(binLength)) {
+        error = fmt::format(
+            "{}: invalid GLB: buffer 0 (the BIN chunk) has byteLength {}, but it must be at least 1 and at "
+            "most "
+            "the BIN chunk's {} bytes",
+            path, length->dump(), binLength);
+        return false;
+    }
     return true;
 }
 
@@ -430,7 +468,8 @@ bool parseGltfFile(const std::string& path, const ParseOptions& options, ParsedG
         return false;
     }
     std::string_view json(bytes.data(), bytes.size());
-    if (isBinary && !checkGlbContainer(path, bytes, json, error)) {
+    int64_t binLength = -1;
+    if (isBinary && !checkGlbContainer(path, bytes, json, binLength, error)) {
         return false;
     }
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
@@ -438,7 +477,8 @@ bool parseGltfFile(const std::string& path, const ParseOptions& options, ParsedG
         return false;
     }
     nlohmann::json doc;
-    if (!checkJsonDepth(path, json, error) || !checkUris(path, json, doc, error)) {
+    if (!checkJsonDepth(path, json, error) || !checkUris(path, json, doc, error) ||
+        (isBinary && !checkGlbBuffer(path, doc, binLength, error))) {
         return false;
     }
     if (options.keepJson) {
@@ -576,12 +616,22 @@ bool chooseRoots(const std::string& path, const tinygltf::Model& model, const st
     }
     if (!scenes.empty()) {
         const size_t s = model.defaultScene >= 0 ? size_t(model.defaultScene) : 0;
+        std::vector<char> listed(model.nodes.size(), 0);
         for (int r : scenes[s].nodes) {
             if (r < 0 || size_t(r) >= model.nodes.size()) {
                 return fail(
                     path, error,
                     fmt::format("scene {}: node index {} out of range ({} nodes)", s, r, model.nodes.size()));
             }
+            if (listed[size_t(r)]) {
+                // Each listing would instance the whole tree again (a few bytes of file per copy).
+                return fail(
+                    path, error,
+                    fmt::format("scene {}: node {} is listed twice in 'nodes' (the glTF schema requires "
+                                "unique root nodes)",
+                                s, r));
+            }
+            listed[size_t(r)] = 1;
             if (parent[size_t(r)] >= 0) {
                 return fail(path, error,
                             fmt::format("scene {}: node {} is not a root node (its parent is node {})", s, r,

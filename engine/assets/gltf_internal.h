@@ -57,6 +57,8 @@ bool checkNodeGraph(const std::string& path, const tinygltf::Model& model, std::
                     std::string& error);
 
 // The root nodes to instance: the default scene's, else scene 0's, else every node without a parent.
+// A scene listing a node twice is refused (the schema requires unique roots), so with
+// checkNodeGraph every node is instanced at most once.
 bool chooseRoots(const std::string& path, const tinygltf::Model& model, const std::vector<int>& parent,
                  std::vector<int>& roots, std::string& error);
 

@@ -2,6 +2,9 @@
 // (or every root node), with node transforms applied. Parsing and validation (GLB container, JSON
 // depth, confined URIs, bufferView / accessor ranges, node graph) are shared with the scene loader:
 // see gltf_internal.h.
+#include <algorithm>
+#include <cstdint>
+
 #include <fmt/format.h>
 #include <glm/glm.hpp>
 
@@ -25,7 +28,8 @@ public:
             return false;
         }
         std::vector<int> roots;
-        if (!gltf::chooseRoots(m_path, m_model, parent, roots, error)) {
+        if (!gltf::chooseRoots(m_path, m_model, parent, roots, error) ||
+            !checkInstancedTotals(roots, error)) {
             return false;
         }
         if (m_model.nodes.empty()) {
@@ -71,6 +75,81 @@ public:
     }
 
 private:
+    // Triangles and vertices one instance of a primitive adds, from its accessor counts (not yet
+    // validated: readPrimitive checks them when it reads; an out-of-range accessor counts 0 here).
+    void primitiveTotals(const tinygltf::Primitive& prim, uint64_t& triangles, uint64_t& vertices) const {
+        triangles = vertices = 0;
+        const int mode = prim.mode < 0 ? TINYGLTF_MODE_TRIANGLES : prim.mode;
+        if (mode != TINYGLTF_MODE_TRIANGLES && mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+            mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+            return;
+        }
+        auto countOf = [&](int accessor) -> uint64_t {
+            return accessor >= 0 && size_t(accessor) < m_model.accessors.size()
+                       ? uint64_t(m_model.accessors[size_t(accessor)].count)
+                       : 0;
+        };
+        const auto pos = prim.attributes.find("POSITION");
+        vertices = pos == prim.attributes.end() ? 0 : countOf(pos->second);
+        const uint64_t indices = prim.indices >= 0 ? countOf(prim.indices) : vertices;
+        triangles = mode == TINYGLTF_MODE_TRIANGLES ? indices / 3 : (indices >= 3 ? indices - 2 : 0);
+    }
+
+    // Instancing multiplies a mesh's triangles by the number of nodes that use it, so a small file
+    // can ask for a huge merged mesh. Before anything is read or merged: the totals over every
+    // instance against the limits (saturating arithmetic: accessor counts are not validated yet).
+    bool checkInstancedTotals(const std::vector<int>& roots, std::string& error) const {
+        std::vector<uint64_t> instances(m_model.meshes.size(), 0);
+        uint64_t instanceCount = 0;
+        if (m_model.nodes.empty()) {
+            std::fill(instances.begin(), instances.end(), 1);
+            instanceCount = instances.size();
+        } else {
+            std::vector<int> stack(roots.begin(), roots.end());
+            while (!stack.empty()) {  // every node at most once (checkNodeGraph, chooseRoots)
+                const tinygltf::Node& node = m_model.nodes[size_t(stack.back())];
+                stack.pop_back();
+                if (node.mesh >= 0) {
+                    ++instances[size_t(node.mesh)];
+                    ++instanceCount;
+                }
+                stack.insert(stack.end(), node.children.begin(), node.children.end());
+            }
+        }
+        auto saturatingAdd = [](uint64_t a, uint64_t b) { return a > UINT64_MAX - b ? UINT64_MAX : a + b; };
+        auto saturatingMul = [](uint64_t a, uint64_t b) {
+            return b != 0 && a > UINT64_MAX / b ? UINT64_MAX : a * b;
+        };
+        uint64_t triangles = 0, vertices = 0;
+        for (size_t m = 0; m < m_model.meshes.size(); ++m) {
+            if (instances[m] == 0) {
+                continue;
+            }
+            for (const tinygltf::Primitive& prim : m_model.meshes[m].primitives) {
+                uint64_t t = 0, v = 0;
+                primitiveTotals(prim, t, v);
+                triangles = saturatingAdd(triangles, saturatingMul(t, instances[m]));
+                vertices = saturatingAdd(vertices, saturatingMul(v, instances[m]));
+            }
+        }
+        if (triangles <= m_limits.maxTriangles && vertices <= m_limits.maxVertices) {
+            return true;
+        }
+        // Merged size: position, normal and uv per vertex (32 bytes), three indices per triangle.
+        const double mib = (double(vertices) * 32.0 + double(triangles) * 12.0) / double(1u << 20);
+        const bool tooManyTriangles = triangles > m_limits.maxTriangles;
+        error = fmt::format(
+            "{}: the scene instances {} mesh{} with {} triangles and {} vertices in total (about {:.1f} MiB "
+            "merged), which exceeds the limit of {} {}; raise {} if this is intended",
+            m_path, instanceCount, instanceCount == 1 ? "" : "es", triangles, vertices, mib,
+            tooManyTriangles ? m_limits.maxTriangles : m_limits.maxVertices,
+            tooManyTriangles ? "triangles" : "vertices",
+            tooManyTriangles
+                ? "the triangle limit (MeshLoadLimits::maxTriangles, penumbra bake --max-triangles)"
+                : "MeshLoadLimits::maxVertices");
+        return false;
+    }
+
     bool addMesh(int meshIndex, const glm::dmat4& world, std::string& error) {
         const tinygltf::Mesh& mesh = m_model.meshes[size_t(meshIndex)];
         const glm::dmat3 normalMatrix = glm::transpose(glm::inverse(glm::dmat3(world)));

@@ -22,10 +22,12 @@ struct MeshData {
     size_t triangleCount() const { return indices.size() / 3; }
 };
 
+// Caps on what one load may produce, checked before the memory is allocated. For glTF they apply
+// to the merged mesh, i.e. to the totals over every node instance (counted before merging).
 struct MeshLoadLimits {
     uint64_t maxFileBytes = 256ull << 20;  // whole-file cap
     uint64_t maxVertices = 64ull << 20;
-    uint64_t maxTriangles = 64ull << 20;
+    uint64_t maxTriangles = 16ull << 20;  // 16 Mi: 192 MiB of indices (penumbra bake --max-triangles)
 };
 
 // Loads by extension: .ply (ascii / binary little and big endian), .obj, .gltf, .glb. Polygons are
@@ -35,7 +37,8 @@ bool loadMesh(const std::string& path, MeshData& out, std::string& error, const 
 
 bool loadPly(const std::string& path, MeshData& out, std::string& error, const MeshLoadLimits& limits = {});
 bool loadObj(const std::string& path, MeshData& out, std::string& error, const MeshLoadLimits& limits = {});
-bool loadGltfMesh(const std::string& path, MeshData& out, std::string& error, const MeshLoadLimits& limits = {});
+bool loadGltfMesh(const std::string& path, MeshData& out, std::string& error,
+                  const MeshLoadLimits& limits = {});
 
 // Writers used by tools and tests (binary little-endian PLY, OBJ).
 bool writePly(const std::string& path, const MeshData& mesh, std::string& error);

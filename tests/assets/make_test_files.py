@@ -118,6 +118,14 @@ def fixtures():
         nodes=[{"mesh": 0}], scenes=[{"nodes": [0]}], scene=0)
     write(os.path.join(FIX, "cube.glb"), glb(doc, bin_b))
 
+    # The same unit cube with every triangle facing inward (an inside-out mesh), as ASCII PLY.
+    text = ply_header("ascii", 8, 12).decode()
+    for i in range(8):
+        text += "%d %d %d\n" % (i & 1, (i >> 1) & 1, (i >> 2) & 1)
+    for a, b, c, d in quads:
+        text += "3 %d %d %d\n3 %d %d %d\n" % (a, c, b, a, d, c)
+    write(os.path.join(FIX, "inside_out_cube.ply"), text)
+
     # Quad with interleaved position + normal (stride 24) and ubyte indices in an external .bin;
     # no scenes: every root node is used.
     inter = []
@@ -311,6 +319,20 @@ def malformed_gltf():
     bad = bytearray(good)
     struct.pack_into("<I", bad, 20 + js_len, 0xFFFFFFFC)  # BIN chunk longer than the file
     write(os.path.join(d, "bin_chunk_too_long.glb"), bytes(bad))
+    # buffer 0 (the BIN chunk) declared with byteLength 0: tinygltf threw vector::_M_range_check
+    doc = triangle_doc()
+    del doc["buffers"][0]["uri"]
+    doc["buffers"][0]["byteLength"] = 0
+    write(os.path.join(d, "glb_buffer_length_zero.glb"), glb(doc, TRI_BIN))
+    doc["buffers"][0]["byteLength"] = len(TRI_BIN) + 4   # longer than the BIN chunk
+    write(os.path.join(d, "glb_buffer_longer_than_bin.glb"), glb(doc, TRI_BIN))
+    doc["buffers"][0]["byteLength"] = len(TRI_BIN)       # no BIN chunk at all
+    write(os.path.join(d, "glb_no_bin_chunk.glb"), glb(doc, None))
+    # the scene lists its root node three times (the schema requires unique roots; each listing
+    # instanced the whole tree again: 20 000 listings in 62 KB took 1.1 GB)
+    doc = triangle_doc()
+    doc["scenes"] = [{"nodes": [0, 0, 0]}]
+    put("scene_duplicate_roots.gltf", doc)
     write(os.path.join(d, "empty.gltf"), b"")
 
 

@@ -94,6 +94,10 @@ const BadFile kBadFiles[] = {
     {"gltf/bad_magic.glb", "bad magic"},
     {"gltf/json_chunk_too_long.glb", "JSON chunk"},
     {"gltf/bin_chunk_too_long.glb", "BIN chunk"},
+    {"gltf/glb_buffer_length_zero.glb", "buffer 0 (the BIN chunk) has byteLength 0"},
+    {"gltf/glb_buffer_longer_than_bin.glb", "at most the BIN chunk's 44 bytes"},
+    {"gltf/glb_no_bin_chunk.glb", "buffer 0 has no uri"},
+    {"gltf/scene_duplicate_roots.gltf", "node 0 is listed twice"},
     {"gltf/empty.gltf", "empty"},
 };
 

@@ -102,6 +102,11 @@ CLI::App* addBakeCommand(CLI::App& app, BakeOptions& opt) {
                     "elongated meshes (docs/FORMATS.md)")
         ->check(CLI::IsMember({"low", "medium", "high"}))
         ->capture_default_str();
+    cmd->add_option("--max-triangles", opt.maxTriangles,
+                    "Refuse meshes with more triangles (glTF: counted over every node instance, before "
+                    "merging)")
+        ->check(CLI::PositiveNumber)
+        ->capture_default_str();
     cmd->add_flag("-q,--quiet", opt.quiet, "No progress bar and no summary; errors only");
     return cmd;
 }
@@ -149,7 +154,9 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
     // load
     Clock::time_point t0 = Clock::now();
     assets::MeshData mesh;
-    if (!assets::loadMesh(opt.input, mesh, error)) {
+    assets::MeshLoadLimits loadLimits;
+    loadLimits.maxTriangles = opt.maxTriangles;
+    if (!assets::loadMesh(opt.input, mesh, error, loadLimits)) {
         log::error("bake: {}", error);
         return 1;
     }
@@ -223,6 +230,10 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
             {"duplicateTrianglesRemoved", diag.duplicateTrianglesRemoved},
             {"duplicateVerticesMerged", diag.duplicateVerticesMerged},
             {"closedManifold", diag.closedManifold},
+            {"inconsistentEdges", diag.inconsistentEdges},
+            {"signedVolume", diag.signedVolume},
+            {"inwardOriented", diag.inwardOriented},
+            {"flippedInsideOut", result.flippedInsideOut},
             {"bbox", {{"min", vec3Json(diag.boundsMin)}, {"max", vec3Json(diag.boundsMax)}}},
         };
         j["grid"] = {
@@ -276,7 +287,11 @@ int runBake(const BakeOptions& opt, const std::string& commandLine) {
     fmt::print("mesh        {} triangles, {} vertices (input {} / {})\n", diag.triangles, diag.vertices,
                diag.inputTriangles, diag.inputVertices);
     fmt::print("topology    {} boundary edges, {} non-manifold edges{}\n", diag.boundaryEdges,
-               diag.nonManifoldEdges, diag.closedManifold ? " (closed manifold)" : "");
+               diag.nonManifoldEdges,
+               !diag.closedManifold      ? ""
+               : result.flippedInsideOut ? " (closed manifold, all triangles facing inward: flipped)"
+               : diag.inwardOriented     ? " (closed manifold, all triangles facing inward: not flipped)"
+                                         : " (closed manifold)");
     fmt::print("clean-up    {} degenerate and {} duplicate triangles removed, {} duplicate vertices merged\n",
                diag.degenerateTrianglesRemoved, diag.duplicateTrianglesRemoved, diag.duplicateVerticesMerged);
     fmt::print("bounds      ({:.6g}, {:.6g}, {:.6g}) .. ({:.6g}, {:.6g}, {:.6g})\n", diag.boundsMin.x,

@@ -10,6 +10,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "engine/assets/mesh.h"
+
 namespace penumbra::cli {
 
 struct BakeOptions {
@@ -23,6 +25,7 @@ struct BakeOptions {
     double bandWidthVoxels = 4.0;
     std::string quality = "medium";
     bool quiet = false;
+    uint64_t maxTriangles = assets::MeshLoadLimits{}.maxTriangles;  // load limit (glTF: all instances)
     CLI::Option* bandWidthOption = nullptr;  // to tell an explicit --band-width from the default
 };
 
