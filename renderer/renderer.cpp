@@ -84,6 +84,7 @@ bool Renderer::renderFrame(Engine& engine, std::string& error, const std::string
     frame.settings = settings;
     frame.width = m_desc.width ? m_desc.width : settings.width;
     frame.height = m_desc.height ? m_desc.height : settings.height;
+    frame.debugView = m_desc.debugView;
     if (m_desc.window) {
         rhi::TextureHandle backbuffer = m_device->acquireBackbuffer();
         const rhi::TextureDesc* bd = m_device->describe(backbuffer);
@@ -108,6 +109,7 @@ bool Renderer::renderFrame(Engine& engine, std::string& error, const std::string
 
 bool Renderer::readPixels(ImageRGBA8& out, std::string& error) { return m_renderer->readPixels(out, error); }
 const render::FrameStats& Renderer::stats() const { return m_renderer->lastFrameStats(); }
+std::vector<fg::FrameTimings> Renderer::takeTimings(bool wait) { return m_renderer->takeTimings(wait); }
 std::string Renderer::frameGraphviz() const { return m_renderer->lastFrameGraphviz(); }
 uint64_t Renderer::validationErrors() const { return rhi::validationErrorCount(*m_device); }
 

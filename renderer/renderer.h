@@ -41,6 +41,8 @@ struct RendererDesc {
     // Output size; 0 = the scene's render settings (offscreen) or the window's size.
     uint32_t width = 0;
     uint32_t height = 0;
+    // Show a G-buffer channel instead of the lit image (`penumbra render --debug-view`).
+    render::DebugView debugView = render::DebugView::None;
 };
 
 class Renderer {
@@ -58,7 +60,10 @@ public:
 
     // The last offscreen frame as 8-bit sRGB RGBA (row 0 = top).
     bool readPixels(ImageRGBA8& out, std::string& error);
+    // The last frame's statistics (waits for its GPU timings if they have not arrived yet).
     const render::FrameStats& stats() const;
+    // Pass timings of every frame that arrived since the last call (no waiting; `wait`: all).
+    std::vector<fg::FrameTimings> takeTimings(bool wait = false);
     std::string frameGraphviz() const;
 
     // Output size for the next frames (windowed: also resizes the swapchain).

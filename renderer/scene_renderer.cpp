@@ -1,7 +1,10 @@
 // The scene renderer: gathers the frame from the World (camera, visible MeshRenderers, lights,
 // the materials they use), makes sure the GPU copies of meshes and textures exist, keeps the
-// persistent G-buffer targets and the velocity history, and builds the frame graph from the passes
-// in renderer/passes/ (scene_upload -> gbuffer_mesh -> lighting).
+// persistent G-buffer targets and the velocity history, and orders the feature modules of
+// renderer/features/ (scene_upload -> mesh_gbuffer -> lighting or debug_view) on one frame graph.
+// render() is an orchestration of steps, each a function below: check the frame and the camera,
+// gather draws/materials/lights, make GPU copies of assets, keep the targets, fill the frame data,
+// build the graph from the modules, submit and record history and statistics.
 //
 // Frame rules (documented here, tested in tests/renderer/scene_renderer_test.cpp):
 // - Draw order and material indices: visible MeshRenderer entities that have a Transform are drawn
@@ -22,17 +25,20 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <utility>
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "renderer/passes/deferred_lighting.h"
-#include "renderer/passes/gbuffer_mesh.h"
-#include "renderer/passes/gpu_scene.h"
-#include "renderer/passes/lighting_reference.h"
-#include "renderer/passes/pass_common.h"
-#include "renderer/passes/scene_upload.h"
+#include "renderer/core/gpu_cache.h"
+#include "renderer/core/targets.h"
+#include "renderer/features/debug_view.h"
+#include "renderer/features/gpu_scene.h"
+#include "renderer/features/lighting.h"
+#include "renderer/features/lighting_reference.h"
+#include "renderer/features/mesh_gbuffer.h"
+#include "renderer/features/scene_upload.h"
 
 namespace penumbra::render {
 namespace {
@@ -51,10 +57,9 @@ constexpr TargetInfo kTargets[kTargetCount] = {
     {"gbuffer.albedo", rhi::Format::RGBA8_SRGB},    {"output", rhi::Format::RGBA8_UNORM},
 };
 
-// A render target owned by the renderer, imported into every frame that uses it.
+// A render target owned by the renderer; the frame graph tracks its state (importPersistent).
 struct Target {
     rhi::TextureHandle handle;
-    rhi::Access state = rhi::Access::None;  // where the last frame left it
     uint64_t bytes = 0;
 };
 
@@ -62,6 +67,32 @@ struct DrawSource {
     ecs::Entity entity;
     const ecs::MeshRenderer* renderer = nullptr;
     glm::mat4 model{1.0f};
+};
+
+struct LightSource {
+    ecs::Entity entity;
+    reference::LightSample sample;
+};
+
+// The camera of a frame, without scale: forward = -zAxis, right = xAxis, up = yAxis.
+struct CameraSetup {
+    glm::vec3 xAxis{1, 0, 0}, yAxis{0, 1, 0}, zAxis{0, 0, 1}, eye{0.0f};
+    glm::mat4 view{1.0f}, proj{1.0f}, viewProj{1.0f};
+    float farPlane = 1.0f;
+};
+
+// What a frame draws, gathered from the World and the asset manager.
+struct FrameGather {
+    std::vector<DrawSource> sources;
+    std::vector<const ecs::Material*> materials;
+    std::vector<uint32_t> drawMaterial;  // per source: index into materials
+    std::vector<const assets::MeshData*> drawMesh;
+    std::vector<const GpuMesh*> gpuMeshes;
+    std::vector<rhi::TextureHandle> materialTexture;  // per material, albedo frames only
+    std::vector<LightSource> lights;
+    bool albedo = false;  // some material has a base-colour texture
+    bool hardwareSrgb = false;
+    bool external = false;
 };
 
 bool finite(const glm::mat4& m) {
@@ -79,9 +110,9 @@ struct SceneRenderer::Impl {
     rhi::Device& device;
     std::string graphErrors;
     fg::FrameGraph graph;
+    GpuCache gpuCache;
     GpuAssetCache cache;
-    GBufferMeshPass gbufferPass;
-    DeferredLightingPass lightingPass;
+    Blackboard board;
 
     uint32_t width = 0, height = 0;
     Target targets[kTargetCount];
@@ -91,10 +122,14 @@ struct SceneRenderer::Impl {
     ecs::Entity historyCamera;
     glm::mat4 prevViewProj{1.0f};
     std::unordered_map<ecs::Entity, glm::mat4> prevModels;
+    uint32_t frameIndex = 0;
 
     // the last frame
     SceneFrameData frameData;  // read by scene_upload's execute
     FrameStats stats;
+    std::vector<fg::FrameTimings> completedTimings;  // polled, not yet taken
+    uint64_t lastFrameNumber = 0;                    // frame-graph number of the last frame
+    uint64_t statsFrameNumber = 0;                   // the frame stats.passes belongs to
     std::string graphviz;
     bool haveFrame = false;
     bool lastOwnOutput = false;
@@ -107,16 +142,18 @@ struct SceneRenderer::Impl {
                 [this](rhi::LogSeverity s, std::string_view msg) {
                     if (s == rhi::LogSeverity::Error) graphErrors.append(msg).append("\n");
                 }),
-          cache(d),
-          gbufferPass(d),
-          lightingPass(d) {}
+          gpuCache(d),
+          cache(d) {}
 
     ~Impl() {
         for (Target& t : targets) release(t);
     }
 
     void release(Target& t) {
-        if (t.handle) device.destroy(t.handle);
+        if (t.handle) {
+            graph.forgetPersistent(t.handle);
+            device.destroy(t.handle);
+        }
         t = {};
     }
 
@@ -132,8 +169,7 @@ struct SceneRenderer::Impl {
                 fmt::format("creating the {}x{} render target '{}' failed", width, height, kTargets[id].name);
             return false;
         }
-        t.state = rhi::Access::None;
-        t.bytes = textureBytes(d);
+        t.bytes = rhi::textureBytes(d);
         return true;
     }
 
@@ -142,6 +178,18 @@ struct SceneRenderer::Impl {
         for (const Target& t : targets) total += t.bytes;
         return total;
     }
+
+    bool checkFrame(const ecs::World& world, const FrameDesc& desc, FrameGather& g, std::string& error);
+    bool setupCamera(const ecs::World& world, const FrameDesc& desc, CameraSetup& cam, std::string& error);
+    bool gather(const ecs::World& world, const assets::AssetManager& assets, FrameGather& g,
+                std::string& error);
+    bool uploadAssets(const assets::AssetManager& assets, FrameGather& g, std::string& error);
+    bool prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error);
+    void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
+    uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
+    std::vector<MeshDraw> importDraws(const FrameGather& g);
+    void finishFrame(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g,
+                     uint64_t transientBytes);
 };
 
 SceneRenderer::SceneRenderer(rhi::Device& device) : m_impl(std::make_unique<Impl>(device)) {}
@@ -152,352 +200,394 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
                            std::string& error) {
     Impl& s = *m_impl;
     error.clear();
-    auto fail = [&](std::string message) {
-        error = "scene renderer: ";
-        error.append(message);
+    FrameGather g;
+    CameraSetup cam;
+    std::string why;
+    if (!s.checkFrame(world, desc, g, why) || !s.setupCamera(world, desc, cam, why) ||
+        !s.gather(world, assets, g, why) || !s.uploadAssets(assets, g, why) ||
+        !s.prepareTargets(desc, g, why)) {
+        error = "scene renderer: " + why;
         return false;
-    };
+    }
+    s.fillFrameData(desc, cam, g);
+    s.graphErrors.clear();
+    const uint64_t transientBytes = s.buildGraph(desc, cam, g);
+    if (!s.graph.compile()) {
+        error = "scene renderer: frame graph compilation failed: " + s.graphErrors;
+        return false;
+    }
+    s.graphviz = s.graph.toGraphviz();
+    rhi::CommandList& cmd = s.device.beginCommandList("scene.frame");
+    s.graph.execute(cmd);
+    s.device.submit(cmd);
+    s.lastFrameNumber = s.graph.frameNumber();
+    s.gpuCache.endFrame();
+    s.finishFrame(desc, cam, g, transientBytes);
+    if (!s.graphErrors.empty()) {
+        error = "scene renderer: frame graph reported errors: " + s.graphErrors;
+        return false;
+    }
+    return true;
+}
 
-    // ---- frame description --------------------------------------------------------------------
-    const uint32_t maxSize = std::max<uint32_t>(s.device.info().limits.maxTextureSize2D, 1);
-    if (desc.width == 0 || desc.height == 0 || desc.width > maxSize || desc.height > maxSize)
-        return fail(
-            fmt::format("frame size {}x{} is invalid (1..{} per side)", desc.width, desc.height, maxSize));
-    if (desc.camera.isNull()) return fail("no camera: FrameDesc::camera is the null entity");
-    const ecs::Camera* camera = world.get<ecs::Camera>(desc.camera);
-    const ecs::Transform* cameraTransform = world.get<ecs::Transform>(desc.camera);
-    if (!world.alive(desc.camera) || !camera || !cameraTransform)
-        return fail(
+// The frame size, the camera entity and an external target.
+bool SceneRenderer::Impl::checkFrame(const ecs::World& world, const FrameDesc& desc, FrameGather& g,
+                                     std::string& error) {
+    const uint32_t maxSize = std::max<uint32_t>(device.info().limits.maxTextureSize2D, 1);
+    if (desc.width == 0 || desc.height == 0 || desc.width > maxSize || desc.height > maxSize) {
+        error = fmt::format("frame size {}x{} is invalid (1..{} per side)", desc.width, desc.height, maxSize);
+        return false;
+    }
+    if (desc.camera.isNull()) {
+        error = "no camera: FrameDesc::camera is the null entity";
+        return false;
+    }
+    if (!world.alive(desc.camera) || !world.get<ecs::Camera>(desc.camera) ||
+        !world.get<ecs::Transform>(desc.camera)) {
+        error =
             fmt::format("no camera: {} (FrameDesc::camera) {}", entityName(desc.camera),
-                        !world.alive(desc.camera) ? "is not alive" : "does not have Camera and Transform"));
-    if (!std::isfinite(camera->fovY) || camera->fovY <= 0.0f || camera->fovY >= 3.14159f ||
-        !std::isfinite(camera->nearPlane) || !std::isfinite(camera->farPlane) || camera->nearPlane <= 0.0f ||
-        camera->farPlane <= camera->nearPlane)
-        return fail(fmt::format("camera {}: fovY {} must be in (0, pi) and 0 < near {} < far {}",
-                                entityName(desc.camera), camera->fovY, camera->nearPlane, camera->farPlane));
-    const bool external = desc.target.isValid();
+                        !world.alive(desc.camera) ? "is not alive" : "does not have Camera and Transform");
+        return false;
+    }
+    g.external = desc.target.isValid();
+    if (!g.external) return true;
     // An RGBA8_SRGB target (e.g. the GL window backbuffer) encodes in hardware; RGBA8_UNORM targets
     // get the exact sRGB OETF in the shader.
-    bool hardwareSrgb = false;
-    if (external) {
-        const rhi::TextureDesc* td = s.device.describe(desc.target);
-        if (!td) return fail("FrameDesc::target is not a live texture");
-        if ((td->format != rhi::Format::RGBA8_UNORM && td->format != rhi::Format::RGBA8_SRGB) ||
-            td->width != desc.width || td->height != desc.height ||
-            !any(td->usage & rhi::TextureUsage::ColorTarget))
-            return fail(
-                fmt::format("FrameDesc::target '{}' must be an RGBA8_UNORM or RGBA8_SRGB colour target of "
-                            "{}x{} (it is {} "
-                            "{}x{})",
-                            td->debugName, desc.width, desc.height, rhi::formatInfo(td->format).name,
-                            td->width, td->height));
-        hardwareSrgb = td->format == rhi::Format::RGBA8_SRGB;
+    const rhi::TextureDesc* td = device.describe(desc.target);
+    if (!td) {
+        error = "FrameDesc::target is not a live texture";
+        return false;
     }
+    if ((td->format != rhi::Format::RGBA8_UNORM && td->format != rhi::Format::RGBA8_SRGB) ||
+        td->width != desc.width || td->height != desc.height ||
+        !any(td->usage & rhi::TextureUsage::ColorTarget)) {
+        error = fmt::format(
+            "FrameDesc::target '{}' must be an RGBA8_UNORM or RGBA8_SRGB colour target of {}x{} (it is "
+            "{} {}x{})",
+            td->debugName, desc.width, desc.height, rhi::formatInfo(td->format).name, td->width, td->height);
+        return false;
+    }
+    g.hardwareSrgb = td->format == rhi::Format::RGBA8_SRGB;
+    return true;
+}
 
-    // Camera basis without scale: forward = -Z, right = X, up = Y (Gram-Schmidt).
-    const glm::mat4& cw = cameraTransform->worldMatrix;
-    if (!finite(cw))
-        return fail(fmt::format("camera {}: world matrix is not finite", entityName(desc.camera)));
+// Camera basis without scale (Gram-Schmidt), view and projection (Vulkan clip space).
+bool SceneRenderer::Impl::setupCamera(const ecs::World& world, const FrameDesc& desc, CameraSetup& cam,
+                                      std::string& error) {
+    const ecs::Camera& camera = *world.get<ecs::Camera>(desc.camera);
+    if (!std::isfinite(camera.fovY) || camera.fovY <= 0.0f || camera.fovY >= 3.14159f ||
+        !std::isfinite(camera.nearPlane) || !std::isfinite(camera.farPlane) || camera.nearPlane <= 0.0f ||
+        camera.farPlane <= camera.nearPlane) {
+        error = fmt::format("camera {}: fovY {} must be in (0, pi) and 0 < near {} < far {}",
+                            entityName(desc.camera), camera.fovY, camera.nearPlane, camera.farPlane);
+        return false;
+    }
+    const glm::mat4& cw = world.get<ecs::Transform>(desc.camera)->worldMatrix;
+    if (!finite(cw)) {
+        error = fmt::format("camera {}: world matrix is not finite", entityName(desc.camera));
+        return false;
+    }
     glm::vec3 zAxis = glm::vec3(cw[2]);
     glm::vec3 xAxis = glm::vec3(cw[0]);
-    if (glm::length(zAxis) < 1e-12f || glm::length(xAxis) < 1e-12f)
-        return fail(fmt::format("camera {}: world matrix is degenerate", entityName(desc.camera)));
-    zAxis = glm::normalize(zAxis);
-    xAxis = xAxis - zAxis * glm::dot(xAxis, zAxis);
-    if (glm::length(xAxis) < 1e-12f)
-        return fail(fmt::format("camera {}: world matrix is degenerate", entityName(desc.camera)));
-    xAxis = glm::normalize(xAxis);
-    const glm::vec3 yAxis = glm::cross(zAxis, xAxis);
-    const glm::vec3 eye = glm::vec3(cw[3]);
-    glm::mat4 cameraRigid(glm::vec4(xAxis, 0), glm::vec4(yAxis, 0), glm::vec4(zAxis, 0), glm::vec4(eye, 1));
-    const glm::mat4 view = glm::affineInverse(cameraRigid);
-    glm::mat4 proj = glm::perspectiveRH_ZO(camera->fovY, float(desc.width) / float(desc.height),
-                                           camera->nearPlane, camera->farPlane);
-    proj[1][1] *= -1.0f;  // Vulkan clip space: NDC y = -1 is image row 0
-    const glm::mat4 viewProj = proj * view;
-
-    // ---- gather draws, materials, lights ---------------------------------------------------------
-    std::vector<DrawSource> sources;
-    for (auto [e, mr, t] : world.view<ecs::MeshRenderer, ecs::Transform>()) {
-        if (mr.visible) sources.push_back({e, &mr, t.worldMatrix});
+    if (glm::length(zAxis) >= 1e-12f && glm::length(xAxis) >= 1e-12f) {
+        zAxis = glm::normalize(zAxis);
+        xAxis = xAxis - zAxis * glm::dot(xAxis, zAxis);
     }
-    std::sort(sources.begin(), sources.end(),
-              [](const DrawSource& a, const DrawSource& b) { return a.entity.index < b.entity.index; });
+    if (glm::length(zAxis) < 1e-12f || glm::length(xAxis) < 1e-12f) {
+        error = fmt::format("camera {}: world matrix is degenerate", entityName(desc.camera));
+        return false;
+    }
+    cam.zAxis = zAxis;
+    cam.xAxis = glm::normalize(xAxis);
+    cam.yAxis = glm::cross(cam.zAxis, cam.xAxis);
+    cam.eye = glm::vec3(cw[3]);
+    const glm::mat4 rigid(glm::vec4(cam.xAxis, 0), glm::vec4(cam.yAxis, 0), glm::vec4(cam.zAxis, 0),
+                          glm::vec4(cam.eye, 1));
+    cam.view = glm::affineInverse(rigid);
+    cam.proj = glm::perspectiveRH_ZO(camera.fovY, float(desc.width) / float(desc.height), camera.nearPlane,
+                                     camera.farPlane);
+    cam.proj[1][1] *= -1.0f;  // Vulkan clip space: NDC y = -1 is image row 0
+    cam.viewProj = cam.proj * cam.view;
+    cam.farPlane = camera.farPlane;
+    return true;
+}
 
+// Visible MeshRenderers (ascending entity index), the materials they use (in order of first use)
+// and the lights.
+bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetManager& assets, FrameGather& g,
+                                 std::string& error) {
+    for (auto [e, mr, t] : world.view<ecs::MeshRenderer, ecs::Transform>())
+        if (mr.visible) g.sources.push_back({e, &mr, t.worldMatrix});
+    std::sort(g.sources.begin(), g.sources.end(),
+              [](const DrawSource& a, const DrawSource& b) { return a.entity.index < b.entity.index; });
     static const ecs::Material kDefaultMaterial{};
     std::unordered_map<assets::AssetId, uint32_t> materialIndex;
-    std::vector<const ecs::Material*> materials;
-    std::vector<uint32_t> drawMaterial(sources.size());
-    std::vector<const assets::MeshData*> drawMesh(sources.size());
-    bool albedo = false;
-    for (size_t i = 0; i < sources.size(); ++i) {
-        const DrawSource& src = sources[i];
+    g.drawMaterial.resize(g.sources.size());
+    g.drawMesh.resize(g.sources.size());
+    for (size_t i = 0; i < g.sources.size(); ++i) {
+        const DrawSource& src = g.sources[i];
         const ecs::MeshRenderer& mr = *src.renderer;
-        if (mr.mesh == 0)
-            return fail(fmt::format("{} (MeshRenderer): no mesh asset (id 0)", entityName(src.entity)));
-        drawMesh[i] = assets.mesh(mr.mesh);
-        if (!drawMesh[i])
-            return fail(fmt::format("{} (MeshRenderer): mesh asset {:016x} is not loaded",
-                                    entityName(src.entity), mr.mesh));
-        if (!finite(src.model))
-            return fail(fmt::format("{} (MeshRenderer): world matrix is not finite", entityName(src.entity)));
+        const std::string who = entityName(src.entity) + " (MeshRenderer)";
+        g.drawMesh[i] = mr.mesh == 0 ? nullptr : assets.mesh(mr.mesh);
+        if (!g.drawMesh[i]) {
+            error = mr.mesh == 0 ? who + ": no mesh asset (id 0)"
+                                 : fmt::format("{}: mesh asset {:016x} is not loaded", who, mr.mesh);
+            return false;
+        }
+        if (!finite(src.model)) {
+            error = who + ": world matrix is not finite";
+            return false;
+        }
         auto it = materialIndex.find(mr.material);
         if (it == materialIndex.end()) {
             const ecs::Material* m = mr.material == 0 ? &kDefaultMaterial : assets.material(mr.material);
-            if (!m)
-                return fail(fmt::format("{} (MeshRenderer): material asset {:016x} is not loaded",
-                                        entityName(src.entity), mr.material));
+            if (!m) {
+                error = fmt::format("{}: material asset {:016x} is not loaded", who, mr.material);
+                return false;
+            }
             if (m->baseColorTexture != 0) {
-                if (!assets.texture(m->baseColorTexture))
-                    return fail(
-                        fmt::format("{} (MeshRenderer): material {:016x}: base-colour texture {:016x} is not "
-                                    "loaded",
-                                    entityName(src.entity), mr.material, m->baseColorTexture));
-                albedo = true;
+                if (!assets.texture(m->baseColorTexture)) {
+                    error = fmt::format("{}: material {:016x}: base-colour texture {:016x} is not loaded",
+                                        who, mr.material, m->baseColorTexture);
+                    return false;
+                }
+                g.albedo = true;
             }
-            it = materialIndex.emplace(mr.material, uint32_t(materials.size())).first;
-            materials.push_back(m);
+            it = materialIndex.emplace(mr.material, uint32_t(g.materials.size())).first;
+            g.materials.push_back(m);
         }
-        drawMaterial[i] = it->second;
+        g.drawMaterial[i] = it->second;
     }
-    if (materials.size() > kMaxMaterialsPerFrame)
-        return fail(
-            fmt::format("more than {} materials in one frame ({} used by the visible MeshRenderers; "
-                        "the G-buffer stores a 16-bit material index)",
-                        kMaxMaterialsPerFrame, materials.size()));
-
-    struct LightSource {
-        ecs::Entity entity;
-        reference::LightSample sample;
-    };
-    std::vector<LightSource> lights;
+    if (g.materials.size() > kMaxMaterialsPerFrame) {
+        error = fmt::format(
+            "more than {} materials in one frame ({} used by the visible MeshRenderers; the G-buffer "
+            "stores a 16-bit material index)",
+            kMaxMaterialsPerFrame, g.materials.size());
+        return false;
+    }
     for (auto [e, light, t] : world.view<ecs::Light, ecs::Transform>())
-        lights.push_back({e, reference::makeLightSample(light, t)});
-    std::sort(lights.begin(), lights.end(),
+        g.lights.push_back({e, reference::makeLightSample(light, t)});
+    std::sort(g.lights.begin(), g.lights.end(),
               [](const LightSource& a, const LightSource& b) { return a.entity.index < b.entity.index; });
+    return true;
+}
 
-    // ---- GPU copies of the assets this frame needs ------------------------------------------------
-    std::vector<const GpuMesh*> gpuMeshes(sources.size());
-    for (size_t i = 0; i < sources.size(); ++i) {
+// GPU copies of the meshes and (albedo frames) textures this frame needs.
+bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, FrameGather& g,
+                                       std::string& error) {
+    g.gpuMeshes.resize(g.sources.size());
+    for (size_t i = 0; i < g.sources.size(); ++i) {
         std::string why;
-        gpuMeshes[i] = s.cache.mesh(sources[i].renderer->mesh, *drawMesh[i], why);
-        if (!gpuMeshes[i])
-            return fail(fmt::format("{} (MeshRenderer): {}", entityName(sources[i].entity), why));
-    }
-    std::vector<rhi::TextureHandle> materialTexture(materials.size());
-    if (albedo) {
-        for (size_t m = 0; m < materials.size(); ++m) {
-            std::string why;
-            if (materials[m]->baseColorTexture == 0) {
-                materialTexture[m] = s.cache.whiteTexture(why);
-                if (!materialTexture[m]) return fail(why);
-                continue;
-            }
-            const GpuTexture* t = s.cache.texture(materials[m]->baseColorTexture,
-                                                  *assets.texture(materials[m]->baseColorTexture), why);
-            if (!t) return fail(why);
-            materialTexture[m] = t->texture;
+        g.gpuMeshes[i] = cache.mesh(g.sources[i].renderer->mesh, *g.drawMesh[i], why);
+        if (!g.gpuMeshes[i]) {
+            error = fmt::format("{} (MeshRenderer): {}", entityName(g.sources[i].entity), why);
+            return false;
         }
     }
+    if (!g.albedo) return true;
+    g.materialTexture.resize(g.materials.size());
+    for (size_t m = 0; m < g.materials.size(); ++m) {
+        const assets::AssetId id = g.materials[m]->baseColorTexture;
+        if (id == 0) {
+            g.materialTexture[m] = cache.whiteTexture(error);
+        } else if (const GpuTexture* t = cache.texture(id, *assets.texture(id), error)) {
+            g.materialTexture[m] = t->texture;
+        }
+        if (!g.materialTexture[m]) return false;
+    }
+    return true;
+}
 
-    // ---- render targets -------------------------------------------------------------------------
+// The persistent targets this frame writes (G-buffer only when something is drawn, albedo only
+// when a material is textured, the own output only without an external target).
+bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error) {
     // From here on the previous frame's targets may change: it can no longer be read back.
-    s.haveFrame = false;
-    if (desc.width != s.width || desc.height != s.height) {
-        for (Target& t : s.targets) s.release(t);
-        s.width = desc.width;
-        s.height = desc.height;
+    haveFrame = false;
+    if (desc.width != width || desc.height != height) {
+        for (Target& t : targets) release(t);
+        width = desc.width;
+        height = desc.height;
     }
-    const bool drawing = !sources.empty();
-    std::string why;
-    for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity}) {
-        if (!drawing) {
-            s.release(s.targets[id]);
-        } else if (!s.ensureTarget(id, why)) {
-            return fail(why);
-        }
+    const bool drawing = !g.sources.empty();
+    for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kOutput}) {
+        const bool needed = id == kOutput ? !g.external : drawing && (id != kAlbedo || g.albedo);
+        if (!needed)
+            release(targets[id]);
+        else if (!ensureTarget(id, error))
+            return false;
     }
-    if (drawing && albedo) {
-        if (!s.ensureTarget(kAlbedo, why)) return fail(why);
-    } else {
-        s.release(s.targets[kAlbedo]);
-    }
-    if (external) {
-        s.release(s.targets[kOutput]);
-    } else if (!s.ensureTarget(kOutput, why)) {
-        return fail(why);
-    }
-    if (drawing &&
-        (!s.gbufferPass.prepare(albedo, why) || !s.lightingPass.prepare(albedo, hardwareSrgb, why)))
-        return fail(why);
+    return true;
+}
 
-    // ---- frame data -----------------------------------------------------------------------------
-    const bool sameCamera = s.haveHistory && s.historyCamera == desc.camera;
-    SceneFrameData& fd = s.frameData;
+void SceneRenderer::Impl::fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g) {
+    const bool sameCamera = haveHistory && historyCamera == desc.camera;
+    SceneFrameData& fd = frameData;
     fd = {};
-    fd.frame.viewProj = viewProj;
-    fd.frame.prevViewProj = sameCamera ? s.prevViewProj : viewProj;
-    fd.frame.position = glm::vec4(eye, 1.0f);
-    fd.frame.forward = glm::vec4(-zAxis, 0.0f);
-    fd.frame.rayRight = glm::vec4(xAxis / proj[0][0], 0.0f);
-    fd.frame.rayUp = glm::vec4(yAxis / proj[1][1], 0.0f);
-    fd.frame.viewport = {float(desc.width), float(desc.height), 1.0f / float(desc.width),
-                         1.0f / float(desc.height)};
-    fd.frame.ambient = glm::vec4(desc.settings.ambient, desc.settings.exposure);
-    fd.frame.background = glm::vec4(desc.settings.background, 1.0f);
-    fd.frame.params = {uint32_t(lights.size()), uint32_t(desc.settings.shading),
-                       uint32_t(desc.settings.toneMapper), hardwareSrgb ? 1u : 0u};
-    for (const ecs::Material* m : materials) {
-        GpuMaterial g;
-        g.baseColor = m->baseColor;
-        g.emissiveMetal = glm::vec4(m->emissive, m->metallic);
-        g.params = {m->roughness, m->baseColorTexture != 0 ? 1.0f : 0.0f, 0.0f, 0.0f};
-        fd.materials.push_back(g);
-    }
-    for (const LightSource& l : lights) {
+    GpuView& v = fd.view;
+    v.viewMatrix = cam.view;
+    v.projMatrix = cam.proj;
+    v.viewProj = cam.viewProj;
+    v.invViewProj = glm::inverse(cam.viewProj);
+    v.prevViewProj = sameCamera ? prevViewProj : cam.viewProj;
+    v.position = glm::vec4(cam.eye, 1.0f);
+    v.forward = glm::vec4(-cam.zAxis, 0.0f);
+    v.rayRight = glm::vec4(cam.xAxis / cam.proj[0][0], 0.0f);
+    v.rayUp = glm::vec4(cam.yAxis / cam.proj[1][1], 0.0f);
+    v.viewport = {float(desc.width), float(desc.height), 1.0f / float(desc.width), 1.0f / float(desc.height)};
+    v.jitter = glm::vec4(0.0f);
+    v.frameIndex = frameIndex;
+    fd.scene.ambient = glm::vec4(desc.settings.ambient, desc.settings.exposure);
+    fd.scene.background = glm::vec4(desc.settings.background, 1.0f);
+    fd.scene.params = {uint32_t(g.lights.size()), uint32_t(desc.settings.shading),
+                       uint32_t(desc.settings.toneMapper), g.hardwareSrgb ? 1u : 0u};
+    for (const ecs::Material* m : g.materials)
+        fd.materials.push_back({m->baseColor,
+                                glm::vec4(m->emissive, m->metallic),
+                                {m->roughness, m->baseColorTexture != 0 ? 1.0f : 0.0f, 0.0f, 0.0f}});
+    for (const LightSource& l : g.lights) {
         const reference::LightSample& ls = l.sample;
-        GpuLight g;
-        float type = ls.type == ecs::LightType::Directional ? 0.0f
-                     : ls.type == ecs::LightType::Point     ? 1.0f
-                                                            : 2.0f;
-        g.positionType = glm::vec4(ls.position, type);
-        g.directionRange = glm::vec4(ls.direction, ls.range);
-        g.radianceRadius = glm::vec4(ls.radiance, ls.radius);
-        fd.lights.push_back(g);
+        const float type = ls.type == ecs::LightType::Directional ? 0.0f
+                           : ls.type == ecs::LightType::Point     ? 1.0f
+                                                                  : 2.0f;
+        fd.lights.push_back({glm::vec4(ls.position, type), glm::vec4(ls.direction, ls.range),
+                             glm::vec4(ls.radiance, ls.radius)});
     }
     if (fd.lights.empty()) fd.lights.push_back(GpuLight{});  // bindable; params.x = 0 lights
-    uint64_t triangles = 0;
-    for (size_t i = 0; i < sources.size(); ++i) {
+    for (size_t i = 0; i < g.sources.size(); ++i) {
         GpuObject o;
-        o.model = sources[i].model;
-        auto prev = s.prevModels.find(sources[i].entity);
-        o.prevModel = prev != s.prevModels.end() ? prev->second : o.model;
+        o.model = g.sources[i].model;
+        auto prev = prevModels.find(g.sources[i].entity);
+        o.prevModel = prev != prevModels.end() ? prev->second : o.model;
         const glm::mat3 m3(o.model);
         const glm::mat3 nm =
             std::abs(glm::determinant(m3)) > 1e-30f ? glm::inverseTranspose(m3) : glm::mat3(1.0f);
         o.normalMatrix = glm::mat4(nm);
-        o.info = {drawMaterial[i], 0u, 0u, 0u};
+        o.info = {g.drawMaterial[i], 0u, 0u, 0u};
         fd.objects.push_back(o);
-        triangles += gpuMeshes[i]->indexCount / 3;
     }
+}
 
-    // ---- frame graph ----------------------------------------------------------------------------
-    fg::FrameGraph& graph = s.graph;
-    s.graphErrors.clear();
-    graph.reset();
-    fg::TextureRef output =
-        external ? graph.importTexture("output", desc.target, desc.targetAccess, desc.targetFinalAccess)
-                 : graph.importTexture("output", s.targets[kOutput].handle, s.targets[kOutput].state,
-                                       rhi::Access::CopySrc);
-    uint64_t transientTargetBytes = 0;
-    uint64_t sceneBytes = 0;
-    if (drawing) {
-        const SceneBuffers scene = addSceneUploadPass(graph, fd);
-        sceneBytes = scene.bytes;
-        GBufferTargets gb;
-        auto importTarget = [&](TargetId id) {
-            return graph.importTexture(kTargets[id].name, s.targets[id].handle, s.targets[id].state,
-                                       rhi::Access::ShaderSampled);
-        };
-        gb.depth = importTarget(kDepth);
-        gb.normal = importTarget(kNormal);
-        gb.material = importTarget(kMaterial);
-        gb.velocity = importTarget(kVelocity);
-        if (albedo) gb.albedo = importTarget(kAlbedo);
-
-        // Each mesh's buffers and each texture imported once.
-        std::unordered_map<const GpuMesh*, std::pair<fg::BufferRef, fg::BufferRef>> meshRefs;
-        std::unordered_map<uint32_t, fg::TextureRef> textureRefs;
-        std::vector<MeshDraw> draws;
-        draws.reserve(sources.size());
-        for (size_t i = 0; i < sources.size(); ++i) {
-            const GpuMesh* gm = gpuMeshes[i];
-            auto it = meshRefs.find(gm);
-            if (it == meshRefs.end()) {
-                const std::string base = fmt::format("mesh.{:016x}", sources[i].renderer->mesh);
-                it = meshRefs
-                         .emplace(gm, std::make_pair(graph.importBuffer(base + ".vertices", gm->vertices,
-                                                                        rhi::Access::VertexRead),
-                                                     graph.importBuffer(base + ".indices", gm->indices,
-                                                                        rhi::Access::IndexRead)))
-                         .first;
-            }
-            MeshDraw d;
-            d.vertices = it->second.first;
-            d.indices = it->second.second;
-            d.indexCount = gm->indexCount;
-            d.objectIndex = uint32_t(i);
-            if (albedo) {
-                const rhi::TextureHandle tex = materialTexture[drawMaterial[i]];
-                auto t = textureRefs.find(tex.value);
-                if (t == textureRefs.end()) {
-                    const ecs::Material* m = materials[drawMaterial[i]];
-                    const std::string name = m->baseColorTexture != 0
-                                                 ? fmt::format("texture.{:016x}", m->baseColorTexture)
-                                                 : std::string("texture.white");
-                    t = textureRefs
-                            .emplace(tex.value, graph.importTexture(name, tex, rhi::Access::ShaderSampled))
-                            .first;
-                }
-                d.baseColor = t->second;
-            }
-            draws.push_back(d);
+// Each mesh's buffers and each texture imported once; one MeshDraw per source.
+std::vector<MeshDraw> SceneRenderer::Impl::importDraws(const FrameGather& g) {
+    std::unordered_map<const GpuMesh*, std::pair<fg::BufferRef, fg::BufferRef>> meshRefs;
+    std::unordered_map<uint32_t, fg::TextureRef> textureRefs;
+    std::vector<MeshDraw> draws;
+    draws.reserve(g.sources.size());
+    for (size_t i = 0; i < g.sources.size(); ++i) {
+        const GpuMesh* gm = g.gpuMeshes[i];
+        auto it = meshRefs.find(gm);
+        if (it == meshRefs.end()) {
+            const std::string base = fmt::format("mesh.{:016x}", g.sources[i].renderer->mesh);
+            it =
+                meshRefs
+                    .emplace(
+                        gm, std::make_pair(
+                                graph.importBuffer(base + ".vertices", gm->vertices, rhi::Access::VertexRead),
+                                graph.importBuffer(base + ".indices", gm->indices, rhi::Access::IndexRead)))
+                    .first;
         }
-        transientTargetBytes +=
-            s.gbufferPass.add(graph, scene, gb, std::move(draws), desc.width, desc.height);
-        s.lightingPass.add(graph, scene, gb, output, hardwareSrgb, desc.width, desc.height);
-    } else {
+        MeshDraw d;
+        d.vertices = it->second.first;
+        d.indices = it->second.second;
+        d.indexCount = gm->indexCount;
+        d.objectIndex = uint32_t(i);
+        if (g.albedo) {
+            const rhi::TextureHandle tex = g.materialTexture[g.drawMaterial[i]];
+            auto t = textureRefs.find(tex.value);
+            if (t == textureRefs.end()) {
+                const assets::AssetId id = g.materials[g.drawMaterial[i]]->baseColorTexture;
+                const std::string name =
+                    id != 0 ? fmt::format("texture.{:016x}", id) : std::string("texture.white");
+                t = textureRefs.emplace(tex.value, graph.importTexture(name, tex, rhi::Access::ShaderSampled))
+                        .first;
+            }
+            d.baseColor = t->second;
+        }
+        draws.push_back(d);
+    }
+    return draws;
+}
+
+// Imports the persistent targets, publishes them and orders the feature modules. Returns the bytes
+// of the transient targets.
+uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetup& cam,
+                                         const FrameGather& g) {
+    graph.reset();
+    board.clear();
+    FrameContext fc{device, graph, gpuCache, board, desc.width, desc.height};
+    Output& out = board.add<Output>();
+    out.srgbTarget = g.hardwareSrgb;
+    out.color = g.external
+                    ? graph.importTexture("output", desc.target, desc.targetAccess, desc.targetFinalAccess)
+                    : graph.importPersistent("output", targets[kOutput].handle, rhi::Access::CopySrc);
+    if (g.sources.empty()) {
         const glm::vec3 bg = desc.settings.background * desc.settings.exposure;
         std::array<float, 4> encoded{};
         // An sRGB target encodes on write (clears included): give it the linear value.
         for (int c = 0; c < 3; ++c) {
             const float mapped = reference::toneMap(desc.settings.toneMapper, bg[c]);
-            encoded[size_t(c)] = hardwareSrgb ? mapped : reference::srgbEncode(mapped);
+            encoded[size_t(c)] = g.hardwareSrgb ? mapped : reference::srgbEncode(mapped);
         }
         encoded[3] = 1.0f;
-        s.lightingPass.addBackground(graph, output, encoded);
+        addBackground(fc, encoded);
+        return 0;
     }
+    addSceneUpload(fc, frameData);
+    auto importTarget = [&](TargetId id) {
+        return graph.importPersistent(kTargets[id].name, targets[id].handle, rhi::Access::ShaderSampled);
+    };
+    GBuffer& gb = board.add<GBuffer>();
+    gb = {importTarget(kDepth), importTarget(kNormal), importTarget(kMaterial), importTarget(kVelocity),
+          g.albedo ? importTarget(kAlbedo) : fg::TextureRef{}};
+    const uint64_t transientBytes = addMeshGBuffer(fc, importDraws(g));
+    if (desc.debugView != DebugView::None)
+        addDebugView(fc, desc.debugView, cam.farPlane);
+    else
+        addLighting(fc);
+    return transientBytes;
+}
 
-    if (!graph.compile()) return fail("frame graph compilation failed: " + s.graphErrors);
-    s.graphviz = graph.toGraphviz();
-    rhi::CommandList& cmd = s.device.beginCommandList("scene.frame");
-    graph.execute(cmd);
-    s.device.submit(cmd);
-    std::vector<fg::PassTiming> timings = graph.collectTimings();
+// History for the next frame's velocity, timings and statistics.
+void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g,
+                                      uint64_t transientBytes) {
+    haveFrame = true;
+    lastOwnOutput = !g.external;
+    lastGbuffer = !g.sources.empty();
+    lastAlbedo = lastGbuffer && g.albedo;
+    haveHistory = true;
+    historyCamera = desc.camera;
+    prevViewProj = cam.viewProj;
+    prevModels.clear();
+    for (const DrawSource& src : g.sources) prevModels[src.entity] = src.model;
+    ++frameIndex;
 
-    // States the frame left the persistent targets in.
-    if (!external) s.targets[kOutput].state = rhi::Access::CopySrc;
-    if (drawing) {
-        for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity})
-            s.targets[id].state = rhi::Access::ShaderSampled;
-        if (albedo) s.targets[kAlbedo].state = rhi::Access::ShaderSampled;
-    }
-    s.haveFrame = true;
-    s.lastOwnOutput = !external;
-    s.lastGbuffer = drawing;
-    s.lastAlbedo = drawing && albedo;
-
-    // Velocity history for the next frame.
-    s.haveHistory = true;
-    s.historyCamera = desc.camera;
-    s.prevViewProj = viewProj;
-    s.prevModels.clear();
-    for (const DrawSource& src : sources) s.prevModels[src.entity] = src.model;
-
-    FrameStats& st = s.stats;
+    FrameStats& st = stats;
     st = {};
-    st.passes = std::move(timings);
-    st.memory.meshBuffers = s.cache.meshBytes();
-    st.memory.textures = s.cache.textureBytes();
-    st.memory.sceneBuffers = sceneBytes;
-    st.memory.renderTargets = s.targetBytes() + transientTargetBytes;
-    st.drawCalls = uint32_t(sources.size());
+    // Timings arrive a few frames late; they are collected here without waiting (takeTimings and
+    // lastFrameStats hand them out).
+    for (fg::FrameTimings& t : graph.pollTimings()) completedTimings.push_back(std::move(t));
+    uint64_t triangles = 0;
+    for (const GpuMesh* m : g.gpuMeshes) triangles += m->indexCount / 3;
+    st.memory.meshBuffers = cache.meshBytes();
+    st.memory.textures = cache.textureBytes();
+    st.memory.sceneBuffers = board.has<SceneBuffers>() ? board.find<SceneBuffers>()->bytes : 0;
+    st.memory.renderTargets = targetBytes() + transientBytes;
+    st.drawCalls = uint32_t(g.sources.size());
     st.triangles = triangles;
-    st.lights = uint32_t(lights.size());
-    st.materials = uint32_t(materials.size());
+    st.lights = uint32_t(g.lights.size());
+    st.materials = uint32_t(g.materials.size());
+}
 
-    if (!s.graphErrors.empty()) return fail("frame graph reported errors: " + s.graphErrors);
-    return true;
+std::vector<fg::FrameTimings> SceneRenderer::takeTimings(bool wait) {
+    Impl& s = *m_impl;
+    for (fg::FrameTimings& t : wait ? s.graph.flushTimings() : s.graph.pollTimings())
+        s.completedTimings.push_back(std::move(t));
+    for (const fg::FrameTimings& t : s.completedTimings)
+        if (t.frame == s.lastFrameNumber) {
+            s.stats.passes = t.passes;
+            s.statsFrameNumber = t.frame;
+        }
+    return std::exchange(s.completedTimings, {});
 }
 
 bool SceneRenderer::readPixels(ImageRGBA8& out, std::string& error) {
@@ -512,7 +602,7 @@ bool SceneRenderer::readPixels(ImageRGBA8& out, std::string& error) {
     }
     const Target& t = s.targets[kOutput];
     std::vector<uint8_t> texels;
-    if (!s.device.readTexture(t.handle, {}, t.state, texels) ||
+    if (!s.device.readTexture(t.handle, {}, s.graph.persistentState(t.handle), texels) ||
         texels.size() != size_t(s.width) * s.height * 4) {
         error = "scene renderer: readPixels: reading back the output texture failed";
         return false;
@@ -534,7 +624,7 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
             return false;
         }
         const Target& t = s.targets[id];
-        if (!s.device.readTexture(t.handle, {}, t.state, texels)) {
+        if (!s.device.readTexture(t.handle, {}, s.graph.persistentState(t.handle), texels)) {
             error = "scene renderer: readTarget: reading back '" + name + "' failed";
             return false;
         }
@@ -546,7 +636,19 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
     return false;
 }
 
-const FrameStats& SceneRenderer::lastFrameStats() const { return m_impl->stats; }
+const FrameStats& SceneRenderer::lastFrameStats() const {
+    Impl& s = *m_impl;
+    if (s.haveFrame && s.statsFrameNumber != s.lastFrameNumber) {
+        // The last frame's timings, waiting for them if needed (never called inside a frame loop
+        // that must not block: such loops use takeTimings(false)). Frames nobody took yet stay
+        // queued for takeTimings().
+        for (fg::FrameTimings& t : s.graph.flushTimings()) s.completedTimings.push_back(std::move(t));
+        for (const fg::FrameTimings& t : s.completedTimings)
+            if (t.frame == s.lastFrameNumber) s.stats.passes = t.passes;
+        s.statsFrameNumber = s.lastFrameNumber;
+    }
+    return s.stats;
+}
 
 std::string SceneRenderer::lastFrameGraphviz() const { return m_impl->graphviz; }
 

@@ -1,11 +1,13 @@
 // The scene renderer: draws an ECS World through the frame graph, written once against the RHI.
-// This issue's passes (renderer/passes/), in frame order:
+// Its passes come from the feature modules in renderer/features/, in frame order:
 //   scene_upload   (transfer)  per-frame camera, lights and materials; mesh vertex/index buffers
 //                              and material textures are uploaded once per asset and kept
 //   gbuffer_mesh   (raster)    MeshRenderer entities into the deferred G-buffer
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
 //                              directional + point lights, ambient) + exposure + tone mapping,
 //                              written sRGB-encoded into the RGBA8 output
+//   debug_view     (raster)    instead of lighting when FrameDesc::debugView is set: one G-buffer
+//                              channel (normals, depth, albedo) in the output
 // A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass).
 //
 // G-buffer (after mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
@@ -32,6 +34,8 @@
 #include "engine/ecs/world.h"
 #include "engine/image/image.h"
 #include "engine/scene/scene.h"
+#include "renderer/features/debug_view.h"
+#include "renderer/features/mesh_gbuffer.h"
 #include "renderer/frame_graph/frame_graph.h"
 #include "rhi/device.h"
 
@@ -67,6 +71,7 @@ struct FrameDesc {
     rhi::TextureHandle target;
     rhi::Access targetAccess = rhi::Access::None;
     rhi::Access targetFinalAccess = rhi::Access::ShaderSampled;
+    DebugView debugView = DebugView::None;  // show a G-buffer channel instead of the lit image
 };
 
 class SceneRenderer {
@@ -89,7 +94,12 @@ public:
     bool readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
                     std::string& error);
 
+    // The last frame's statistics; its pass timings are waited for if they have not arrived yet
+    // (so frame loops that must not block use takeTimings(false) instead).
     const FrameStats& lastFrameStats() const;
+    // Pass timings of every frame that arrived since the last call, oldest first: without waiting
+    // (a few frames late), or with `wait` everything outstanding (the end of a run).
+    std::vector<fg::FrameTimings> takeTimings(bool wait);
     std::string lastFrameGraphviz() const;
 
     // Drops every cached GPU copy of assets no longer alive in `assets` (call after unloading).
@@ -99,9 +109,5 @@ private:
     struct Impl;
     std::unique_ptr<Impl> m_impl;
 };
-
-// Octahedral normal encoding as the shaders do it (exposed for tests): unit vector <-> [-1,1]^2.
-glm::vec2 octEncode(glm::vec3 n);
-glm::vec3 octDecode(glm::vec2 e);
 
 }  // namespace penumbra::render

@@ -86,7 +86,7 @@ ShaderParams& ShaderParams::setStorage(std::string_view name, rhi::TextureHandle
     return *this;
 }
 
-bool ShaderParams::bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHandle pipeline) const {
+bool ShaderParams::bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHandle pipeline) {
     std::string error = m_error;
     for (const Param& p : m_params)
         if (error.empty() && !p.isSet)
@@ -96,6 +96,9 @@ bool ShaderParams::bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHan
         log::error("shader parameters: {}", error);
         return false;
     }
+    if (pipeline != m_boundPipeline)
+        std::fill(std::begin(m_bound), std::end(m_bound), rhi::BindGroupHandle{});
+    m_boundPipeline = pipeline;
     std::vector<rhi::BindGroupEntry> entries;
     for (size_t i = 0; i < m_params.size();) {
         const uint32_t set = m_params[i].binding.set;
@@ -107,7 +110,9 @@ bool ShaderParams::bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHan
             log::error("shader parameters: {}: creating the bind group of set {} failed", m_program, set);
             return false;
         }
+        if (set < rhi::kMaxBindGroups && m_bound[set] == group) continue;
         cmd.bindGroup(set, group);
+        if (set < rhi::kMaxBindGroups) m_bound[set] = group;
     }
     return true;
 }

@@ -37,7 +37,9 @@ public:
     ShaderParams& setStorage(std::string_view name, rhi::TextureHandle texture, uint32_t mip = 0);
 
     // Creates or reuses the bind groups of every set and binds them; false after logging an error.
-    bool bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHandle pipeline) const;
+    // Within one ShaderParams (one pass, one pipeline) a set whose group did not change since the
+    // last bind() is not bound again, so per-draw parameters cost one bind of their own set.
+    bool bind(rhi::CommandList& cmd, GpuCache& cache, rhi::PipelineHandle pipeline);
     // The first error (empty when none).
     const std::string& error() const { return m_error; }
 
@@ -53,6 +55,8 @@ private:
     std::string m_program;
     std::vector<Param> m_params;  // every binding of the program, sorted by (set, binding)
     std::string m_error;
+    rhi::BindGroupHandle m_bound[rhi::kMaxBindGroups];
+    rhi::PipelineHandle m_boundPipeline;
 };
 
 // Workgroups covering `width` x `height` (x `depth`) invocations with the shader's local size.

@@ -12,10 +12,20 @@
 #include <shaders/demo_shade.h>
 #include <shaders/demo_trace.h>
 
-#include "renderer/passes/pass_common.h"
+#include "renderer/core/targets.h"
 
 namespace penumbra::demo {
 namespace {
+
+rhi::BindGroupHandle makeBindGroup(rhi::Device& device, rhi::PipelineHandle pipeline, uint32_t set,
+                                   std::vector<rhi::BindGroupEntry> entries, std::string name) {
+    rhi::BindGroupDesc desc;
+    desc.pipeline = pipeline;
+    desc.set = set;
+    desc.entries = std::move(entries);
+    desc.debugName = std::move(name);
+    return device.createBindGroup(desc);
+}
 
 // std430 / std140 mirrors of demo_common.glsl and demo_camera.glsl.
 struct GpuPrimitive {
@@ -313,13 +323,13 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             gb.viewDepth = d.viewDepth;
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto scene = render::makeBindGroup(
+            auto scene = makeBindGroup(
                 ctx.device, tracePipe, 0,
                 {rhi::BindGroupEntry::makeBuffer(0, cameraBuf), rhi::BindGroupEntry::makeBuffer(1, primBuf),
                  rhi::BindGroupEntry::makeBuffer(2, matBuf),
                  rhi::BindGroupEntry::makeSampled(3, ctx.texture(volumeRef), linearSampler)},
                 "demo.trace.scene");
-            auto out = render::makeBindGroup(ctx.device, tracePipe, 1,
+            auto out = makeBindGroup(ctx.device, tracePipe, 1,
                                              {rhi::BindGroupEntry::makeStorage(0, ctx.texture(d.normal)),
                                               rhi::BindGroupEntry::makeStorage(1, ctx.texture(d.viewDepth))},
                                              "demo.trace.gbuffer");
@@ -343,9 +353,9 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
             auto camGroup =
-                render::makeBindGroup(ctx.device, depthPipe, 0,
+                makeBindGroup(ctx.device, depthPipe, 0,
                                       {rhi::BindGroupEntry::makeBuffer(0, cameraBuf)}, "demo.depth.camera");
-            auto src = render::makeBindGroup(
+            auto src = makeBindGroup(
                 ctx.device, depthPipe, 1,
                 {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.viewDepth), nearestSampler)},
                 "demo.depth.source");
@@ -376,7 +386,7 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             b.write(d.depth, rhi::Access::DepthTargetWrite);
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto camGroup = render::makeBindGroup(
+            auto camGroup = makeBindGroup(
                 ctx.device, meshPipe, 0, {rhi::BindGroupEntry::makeBuffer(0, cameraBuf)}, "demo.mesh.camera");
             rhi::RenderPassDesc rp;
             rp.colorAttachments = {{ctx.texture(d.normal), 0, 0, rhi::LoadOp::Load},
@@ -409,13 +419,13 @@ DemoResult renderDemoFrame(rhi::Device& device, const DemoSettings& settings) {
             b.write(finalRef, rhi::Access::ColorTarget);
         },
         [&](const Gbuffer& d, fg::PassContext& ctx) {
-            auto scene = render::makeBindGroup(
+            auto scene = makeBindGroup(
                 ctx.device, shadePipe, 0,
                 {rhi::BindGroupEntry::makeBuffer(0, cameraBuf), rhi::BindGroupEntry::makeBuffer(1, primBuf),
                  rhi::BindGroupEntry::makeBuffer(2, matBuf),
                  rhi::BindGroupEntry::makeSampled(3, ctx.texture(volumeRef), linearSampler)},
                 "demo.shade.scene");
-            auto gbuf = render::makeBindGroup(
+            auto gbuf = makeBindGroup(
                 ctx.device, shadePipe, 1,
                 {rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.normal), nearestSampler),
                  rhi::BindGroupEntry::makeSampled(1, ctx.texture(d.viewDepth), nearestSampler)},

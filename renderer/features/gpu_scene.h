@@ -1,5 +1,7 @@
-// CPU mirrors of the per-frame scene data in renderer/shaders/scene.glsl (std140 camera block,
-// std430 storage-buffer elements). Change both together.
+// CPU mirrors of the per-frame scene data in renderer/shaders/scene.glsl and view.glsl (std140
+// uniform blocks, std430 storage-buffer elements). The View block's struct is the one shaderc
+// generates (shaders/view.h); scene_upload.cpp checks these structs against the generated ones at
+// compile time, so a layout change on either side fails the build.
 #pragma once
 
 #include <cstdint>
@@ -8,21 +10,18 @@
 #include <glm/mat4x4.hpp>
 #include <glm/vec4.hpp>
 
+#include <shaders/view.h>
+
 namespace penumbra::render {
 
-struct GpuFrame {
-    glm::mat4 viewProj;
-    glm::mat4 prevViewProj;
-    glm::vec4 position;
-    glm::vec4 forward;
-    glm::vec4 rayRight;    // camera right / proj[0][0]
-    glm::vec4 rayUp;       // camera up / proj[1][1]
-    glm::vec4 viewport;    // width, height, 1 / width, 1 / height
+using GpuView = shaders::View;  // set 0, binding 0 of every program
+
+struct GpuScene {
     glm::vec4 ambient;     // rgb ambient, w exposure
     glm::vec4 background;  // rgb background radiance
     glm::uvec4 params;     // x light count, y shading model, z tone mapper, w 1 = sRGB target
 };
-static_assert(sizeof(GpuFrame) == 2 * 64 + 8 * 16);
+static_assert(sizeof(GpuScene) == 48);
 
 struct GpuMaterial {
     glm::vec4 baseColor;
@@ -46,11 +45,6 @@ struct GpuObject {
 };
 static_assert(sizeof(GpuObject) == 208);
 
-// Push constant of one gbuffer_mesh draw.
-struct GpuDrawPush {
-    glm::uvec4 object;  // x index into the objects buffer
-};
-
 // Interleaved vertex of the mesh vertex buffers (locations 0, 1, 2).
 struct GpuVertex {
     float position[3];
@@ -60,9 +54,10 @@ struct GpuVertex {
 static_assert(sizeof(GpuVertex) == 32);
 
 // Everything the scene_upload pass writes this frame (the lights array holds at least one
-// element so the buffer can always be bound; frame.params.x says how many are real).
+// element so the buffer can always be bound; scene.params.x says how many are real).
 struct SceneFrameData {
-    GpuFrame frame{};
+    GpuView view{};
+    GpuScene scene{};
     std::vector<GpuMaterial> materials;
     std::vector<GpuLight> lights;
     std::vector<GpuObject> objects;

@@ -1,126 +1,86 @@
-#include "renderer/passes/deferred_lighting.h"
+#include "renderer/features/lighting.h"
 
 #include <shaders/deferred_lighting.h>
-#include <shaders/deferred_lighting_albedo.h>
-
-#include "renderer/passes/pass_common.h"
 
 namespace penumbra::render {
 
-DeferredLightingPass::DeferredLightingPass(rhi::Device& device) : m_device(device) {}
-
-DeferredLightingPass::~DeferredLightingPass() {
-    for (Variant& v : m_variants) {
-        if (v.pipeline) m_device.destroy(v.pipeline);
-        if (v.vs) m_device.destroy(v.vs);
-        if (v.fs) m_device.destroy(v.fs);
-    }
-    if (m_sampler) m_device.destroy(m_sampler);
+void beginFullscreen(fg::PassContext& ctx, fg::TextureRef target, rhi::PipelineHandle pipeline,
+                     const char* name) {
+    const rhi::TextureDesc& size = ctx.textureDesc(target);
+    rhi::ColorAttachment a;
+    a.texture = ctx.texture(target);
+    a.load = rhi::LoadOp::DontCare;  // every pixel is written
+    rhi::RenderPassDesc rp;
+    rp.colorAttachments = {a};
+    rp.debugName = name;
+    ctx.cmd.beginRenderPass(rp);
+    ctx.cmd.setViewport({0, 0, float(size.width), float(size.height), 0, 1});
+    ctx.cmd.setScissor({0, 0, size.width, size.height});
+    ctx.cmd.bindPipeline(pipeline);
 }
 
-bool DeferredLightingPass::prepare(bool albedo, bool srgbTarget, std::string& error) {
-    Variant& v = m_variants[variantIndex(albedo, srgbTarget)];
-    if (v.pipeline) return true;
-    if (!v.vs)
-        v.vs = m_device.createShader(albedo ? shaders::deferred_lighting_albedo::vertex()
-                                            : shaders::deferred_lighting::vertex());
-    if (!v.fs)
-        v.fs = m_device.createShader(albedo ? shaders::deferred_lighting_albedo::fragment()
-                                            : shaders::deferred_lighting::fragment());
-    if (!v.vs || !v.fs) {
-        error = "lighting: creating the shaders failed";
-        return false;
-    }
-    rhi::GraphicsPipelineDesc d;
-    d.vertexShader = v.vs;
-    d.fragmentShader = v.fs;
-    d.colorFormats = {srgbTarget ? rhi::Format::RGBA8_SRGB : rhi::Format::RGBA8_UNORM};
-    d.debugName = albedo ? "deferred_lighting_albedo" : "deferred_lighting";
-    v.pipeline = m_device.createGraphicsPipeline(d);
-    if (!v.pipeline) {
-        error = std::string("lighting: creating the pipeline '") + d.debugName + "' failed";
-        return false;
-    }
-    if (!m_sampler) {
-        rhi::SamplerDesc s;
-        s.minFilter = s.magFilter = rhi::Filter::Nearest;
-        s.debugName = "lighting.gbuffer";
-        m_sampler = m_device.createSampler(s);
-        if (!m_sampler) {
-            error = "lighting: creating the G-buffer sampler failed";
-            return false;
-        }
-    }
-    return true;
+void drawFullscreen(fg::PassContext& ctx, ShaderParams& params, GpuCache& cache,
+                    rhi::PipelineHandle pipeline) {
+    if (params.bind(ctx.cmd, cache, pipeline)) ctx.cmd.draw(3);
+    ctx.cmd.endRenderPass();
 }
 
-void DeferredLightingPass::add(fg::FrameGraph& graph, const SceneBuffers& scene,
-                               const GBufferTargets& gbuffer, fg::TextureRef output, bool srgbTarget,
-                               uint32_t width, uint32_t height) {
+void addLighting(FrameContext& fc) {
+    namespace program = shaders::deferred_lighting;
     struct Data {
         SceneBuffers scene;
-        GBufferTargets gb;
+        GBuffer gb;
         fg::TextureRef output;
     };
+    const Output& output = *fc.board.find<Output>();
+    const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const bool albedo = gbuffer.albedo.isValid();
-    const rhi::PipelineHandle pipeline = m_variants[variantIndex(albedo, srgbTarget)].pipeline;
-    const rhi::SamplerHandle sampler = m_sampler;
-    graph.addPass<Data>(
+    const auto variant = albedo ? program::Variant::Albedo : program::Variant::Default;
+    const rhi::ShaderDesc& vs = program::vertex(variant);
+    const rhi::ShaderDesc& fs = program::fragment(variant);
+    rhi::GraphicsPipelineDesc pd;
+    pd.colorFormats = {output.srgbTarget ? rhi::Format::RGBA8_SRGB : rhi::Format::RGBA8_UNORM};
+    const rhi::PipelineHandle pipeline = fc.cache.graphicsPipeline(vs, fs, pd);
+    rhi::SamplerDesc nearest;
+    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
+    const rhi::SamplerHandle sampler = fc.cache.sampler(nearest);
+    fc.graph.addPass<Data>(
         "lighting", fg::PassKind::Raster,
         [&](fg::PassBuilder& b, Data& d) {
-            d.scene = scene;
+            d.scene = *fc.board.find<SceneBuffers>();
             d.gb = gbuffer;
-            d.output = b.write(output, rhi::Access::ColorTarget);
-            b.read(d.scene.frame, rhi::Access::UniformRead);
+            d.output = b.write(output.color, rhi::Access::ColorTarget);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.materials, rhi::Access::ShaderRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
-            b.read(d.gb.depth, rhi::Access::ShaderSampled);
-            b.read(d.gb.normal, rhi::Access::ShaderSampled);
-            b.read(d.gb.material, rhi::Access::ShaderSampled);
-            if (albedo) b.read(d.gb.albedo, rhi::Access::ShaderSampled);
+            for (fg::TextureRef t : {d.gb.depth, d.gb.normal, d.gb.material, d.gb.albedo})
+                if (t.isValid()) b.read(t, rhi::Access::ShaderSampled);
         },
-        [pipeline, sampler, albedo, width, height](const Data& d, fg::PassContext& ctx) {
-            rhi::BindGroupHandle sceneGroup =
-                makeBindGroup(ctx.device, pipeline, 0,
-                              {rhi::BindGroupEntry::makeBuffer(0, ctx.buffer(d.scene.frame)),
-                               rhi::BindGroupEntry::makeBuffer(1, ctx.buffer(d.scene.materials)),
-                               rhi::BindGroupEntry::makeBuffer(2, ctx.buffer(d.scene.lights))},
-                              "lighting.scene");
-            std::vector<rhi::BindGroupEntry> gbEntries = {
-                rhi::BindGroupEntry::makeSampled(0, ctx.texture(d.gb.depth), sampler),
-                rhi::BindGroupEntry::makeSampled(1, ctx.texture(d.gb.normal), sampler),
-                rhi::BindGroupEntry::makeSampled(2, ctx.texture(d.gb.material), sampler)};
-            if (albedo)
-                gbEntries.push_back(rhi::BindGroupEntry::makeSampled(3, ctx.texture(d.gb.albedo), sampler));
-            rhi::BindGroupHandle gbGroup =
-                makeBindGroup(ctx.device, pipeline, 1, std::move(gbEntries), "lighting.gbuffer");
-            rhi::RenderPassDesc rp;
-            rhi::ColorAttachment a;
-            a.texture = ctx.texture(d.output);
-            a.load = rhi::LoadOp::DontCare;  // every pixel is written
-            rp.colorAttachments = {a};
-            rp.debugName = "lighting";
-            ctx.cmd.beginRenderPass(rp);
-            ctx.cmd.setViewport({0, 0, float(width), float(height), 0, 1});
-            ctx.cmd.setScissor({0, 0, width, height});
-            ctx.cmd.bindPipeline(pipeline);
-            ctx.cmd.bindGroup(0, sceneGroup);
-            ctx.cmd.bindGroup(1, gbGroup);
-            ctx.cmd.draw(3);
-            ctx.cmd.endRenderPass();
-            ctx.device.destroy(sceneGroup);
-            ctx.device.destroy(gbGroup);
+        [&cache = fc.cache, &vs, &fs, pipeline, sampler, albedo](const Data& d, fg::PassContext& ctx) {
+            beginFullscreen(ctx, d.output, pipeline, "lighting");
+            ShaderParams params(vs, fs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("Scene", ctx.buffer(d.scene.scene))
+                .set("Materials", ctx.buffer(d.scene.materials))
+                .set("Lights", ctx.buffer(d.scene.lights))
+                .set("gbufferDepth", ctx.texture(d.gb.depth), sampler)
+                .set("gbufferNormal", ctx.texture(d.gb.normal), sampler)
+                .set("gbufferMaterial", ctx.texture(d.gb.material), sampler);
+            if (albedo) params.set("gbufferAlbedo", ctx.texture(d.gb.albedo), sampler);
+            drawFullscreen(ctx, params, cache, pipeline);
         });
 }
 
-void DeferredLightingPass::addBackground(fg::FrameGraph& graph, fg::TextureRef output,
-                                         std::array<float, 4> encoded) {
+void addBackground(FrameContext& fc, std::array<float, 4> encoded) {
     struct Data {
         fg::TextureRef output;
     };
-    graph.addPass<Data>(
+    fc.graph.addPass<Data>(
         "lighting", fg::PassKind::Raster,
-        [&](fg::PassBuilder& b, Data& d) { d.output = b.write(output, rhi::Access::ColorTarget); },
+        [&](fg::PassBuilder& b, Data& d) {
+            d.output = b.write(fc.board.find<Output>()->color, rhi::Access::ColorTarget);
+        },
         [encoded](const Data& d, fg::PassContext& ctx) {
             rhi::RenderPassDesc rp;
             rhi::ColorAttachment a;

@@ -1,13 +1,38 @@
-#include "renderer/passes/scene_upload.h"
+#include "renderer/features/scene_upload.h"
 
 #include <algorithm>
+#include <cstddef>
 
 #include <fmt/format.h>
 
-#include "renderer/passes/pass_common.h"
+#include <shaders/deferred_lighting.h>
+#include <shaders/gbuffer_mesh.h>
 
 namespace penumbra::render {
 namespace {
+
+// The CPU mirrors of gpu_scene.h against the structs shaderc generated from scene.glsl.
+#define PENUMBRA_SAME_LAYOUT(Cpu, Gpu, member)                    \
+    static_assert(offsetof(Cpu, member) == offsetof(Gpu, member), \
+                  #Cpu "::" #member " differs from the shader")
+static_assert(sizeof(GpuScene) == sizeof(shaders::deferred_lighting::Scene));
+PENUMBRA_SAME_LAYOUT(GpuScene, shaders::deferred_lighting::Scene, ambient);
+PENUMBRA_SAME_LAYOUT(GpuScene, shaders::deferred_lighting::Scene, background);
+PENUMBRA_SAME_LAYOUT(GpuScene, shaders::deferred_lighting::Scene, params);
+static_assert(sizeof(GpuMaterial) == sizeof(shaders::deferred_lighting::Material));
+PENUMBRA_SAME_LAYOUT(GpuMaterial, shaders::deferred_lighting::Material, baseColor);
+PENUMBRA_SAME_LAYOUT(GpuMaterial, shaders::deferred_lighting::Material, emissiveMetal);
+PENUMBRA_SAME_LAYOUT(GpuMaterial, shaders::deferred_lighting::Material, params);
+static_assert(sizeof(GpuLight) == sizeof(shaders::deferred_lighting::Light));
+PENUMBRA_SAME_LAYOUT(GpuLight, shaders::deferred_lighting::Light, positionType);
+PENUMBRA_SAME_LAYOUT(GpuLight, shaders::deferred_lighting::Light, directionRange);
+PENUMBRA_SAME_LAYOUT(GpuLight, shaders::deferred_lighting::Light, radianceRadius);
+static_assert(sizeof(GpuObject) == sizeof(shaders::gbuffer_mesh::Object));
+PENUMBRA_SAME_LAYOUT(GpuObject, shaders::gbuffer_mesh::Object, model);
+PENUMBRA_SAME_LAYOUT(GpuObject, shaders::gbuffer_mesh::Object, prevModel);
+PENUMBRA_SAME_LAYOUT(GpuObject, shaders::gbuffer_mesh::Object, normalMatrix);
+PENUMBRA_SAME_LAYOUT(GpuObject, shaders::gbuffer_mesh::Object, info);
+#undef PENUMBRA_SAME_LAYOUT
 
 // vkCmdUpdateBuffer's limit per call; larger uploads are split.
 constexpr uint64_t kMaxUpdateBytes = 65536;
@@ -153,7 +178,7 @@ const GpuTexture* GpuAssetCache::texture(assets::AssetId id, const assets::Textu
         return nullptr;
     }
     m_device.writeTexture(t.texture, {}, data.rgba8.data(), data.rgba8.size());
-    t.bytes = penumbra::render::textureBytes(d);
+    t.bytes = rhi::textureBytes(d);
     return &(m_textures[id] = t);
 }
 
@@ -206,34 +231,32 @@ uint64_t GpuAssetCache::textureBytes() const {
 
 // ---- the pass -----------------------------------------------------------------------------------
 
-SceneBuffers addSceneUploadPass(fg::FrameGraph& graph, const SceneFrameData& data) {
-    SceneBuffers out;
-    graph.addPass<SceneBuffers>(
+void addSceneUpload(FrameContext& fc, const SceneFrameData& data) {
+    SceneBuffers& out = fc.board.add<SceneBuffers>();
+    fc.graph.addPass<SceneBuffers>(
         "scene_upload", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, SceneBuffers& d) {
             auto buffer = [&](const char* name, uint64_t size) {
                 rhi::BufferDesc desc;
                 desc.size = size;
                 desc.debugName = name;
-                out.bytes += size;
+                d.bytes += size;
                 return b.write(b.createBuffer(name, desc), rhi::Access::CopyDst);
             };
-            d.frame = buffer("scene.frame", sizeof(GpuFrame));
+            d.view = buffer("scene.view", sizeof(GpuView));
+            d.scene = buffer("scene.constants", sizeof(GpuScene));
+            d.objects = buffer("scene.objects", arrayBytes(data.objects));
             d.materials = buffer("scene.materials", arrayBytes(data.materials));
             d.lights = buffer("scene.lights", arrayBytes(data.lights));
-            d.objects = buffer("scene.objects", arrayBytes(data.objects));
-            out.frame = d.frame;
-            out.materials = d.materials;
-            out.lights = d.lights;
-            out.objects = d.objects;
+            out = d;
         },
         [&data](const SceneBuffers& d, fg::PassContext& ctx) {
-            updateChunked(ctx.cmd, ctx.buffer(d.frame), &data.frame, sizeof(GpuFrame));
+            updateChunked(ctx.cmd, ctx.buffer(d.view), &data.view, sizeof(GpuView));
+            updateChunked(ctx.cmd, ctx.buffer(d.scene), &data.scene, sizeof(GpuScene));
+            updateArray(ctx.cmd, ctx.buffer(d.objects), data.objects);
             updateArray(ctx.cmd, ctx.buffer(d.materials), data.materials);
             updateArray(ctx.cmd, ctx.buffer(d.lights), data.lights);
-            updateArray(ctx.cmd, ctx.buffer(d.objects), data.objects);
         });
-    return out;
 }
 
 }  // namespace penumbra::render

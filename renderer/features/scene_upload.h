@@ -1,7 +1,8 @@
-// Pass "scene_upload" (Transfer): writes this frame's scene data (camera/frame constants,
-// materials, lights, per-object matrices) into frame-graph buffers with command-list updates, and
-// the GPU asset cache that keeps one copy of every mesh (interleaved vertex buffer + index buffer)
-// and every material texture across frames, uploaded the first time a frame needs it.
+// Feature "scene_upload": the pass (Transfer) that writes this frame's scene data (the per-view
+// block, scene constants, materials, lights, per-object matrices) into frame-graph buffers with
+// command-list updates and publishes them as SceneBuffers; and the GPU asset cache that keeps one copy of
+// every mesh (interleaved vertex buffer + index buffer) and every material texture across frames, uploaded
+// the first time a frame needs it.
 #pragma once
 
 #include <cstdint>
@@ -9,8 +10,8 @@
 #include <unordered_map>
 
 #include "engine/assets/asset_manager.h"
-#include "renderer/frame_graph/frame_graph.h"
-#include "renderer/passes/gpu_scene.h"
+#include "renderer/features/frame_context.h"
+#include "renderer/features/gpu_scene.h"
 #include "rhi/device.h"
 
 namespace penumbra::render {
@@ -64,16 +65,8 @@ private:
     rhi::TextureHandle m_white;
 };
 
-// This frame's scene buffers (frame-graph transients written by scene_upload).
-struct SceneBuffers {
-    fg::BufferRef frame;      // GpuFrame, uniform
-    fg::BufferRef materials;  // GpuMaterial[], storage
-    fg::BufferRef lights;     // GpuLight[] (>= 1 element), storage
-    fg::BufferRef objects;    // GpuObject[], storage
-    uint64_t bytes = 0;       // sum of their sizes
-};
-
-// Adds the "scene_upload" pass. `data` must stay alive and unchanged until the graph has executed.
-SceneBuffers addSceneUploadPass(fg::FrameGraph& graph, const SceneFrameData& data);
+// Adds the "scene_upload" pass and publishes SceneBuffers. `data` must stay alive and unchanged
+// until the graph has executed.
+void addSceneUpload(FrameContext& fc, const SceneFrameData& data);
 
 }  // namespace penumbra::render

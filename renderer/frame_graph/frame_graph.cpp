@@ -75,19 +75,6 @@ bool sameShape(const rhi::BufferDesc& a, const rhi::BufferDesc& b) {
     return a.size == b.size && a.memory == b.memory;
 }
 
-uint64_t textureBytes(const rhi::TextureDesc& d) {
-    uint64_t bpt = rhi::formatInfo(d.format).bytesPerTexel;
-    uint64_t total = 0;
-    for (uint32_t m = 0; m < std::max(d.mipLevels, 1u); ++m) {
-        uint64_t w = std::max(d.width >> m, 1u);
-        uint64_t h = std::max(d.height >> m, 1u);
-        uint64_t z = d.dimension == rhi::TextureDimension::Tex3D ? std::max(d.depthOrLayers >> m, 1u)
-                                                                 : std::max(d.depthOrLayers, 1u);
-        total += w * h * z * bpt;
-    }
-    return total;
-}
-
 const char* typeName(bool texture) { return texture ? "texture" : "buffer"; }
 
 // Whether one pass may combine these reads and writes on one subresource.
@@ -575,6 +562,21 @@ TextureRef FrameGraph::importTexture(std::string name, rhi::TextureHandle textur
     return r == kInvalidIndex ? TextureRef{} : TextureRef{r, m_epoch};
 }
 
+TextureRef FrameGraph::importPersistent(std::string name, rhi::TextureHandle texture, rhi::Access finalState) {
+    auto it = m_persistent.find(texture.value);
+    const rhi::Access current = it == m_persistent.end() ? Access::None : it->second;
+    TextureRef ref = importTexture(std::move(name), texture, current, finalState);
+    if (ref.isValid()) m_persistent[texture.value] = current;  // updated by compile()
+    return ref;
+}
+
+rhi::Access FrameGraph::persistentState(rhi::TextureHandle texture) const {
+    auto it = m_persistent.find(texture.value);
+    return it == m_persistent.end() ? Access::None : it->second;
+}
+
+void FrameGraph::forgetPersistent(rhi::TextureHandle texture) { m_persistent.erase(texture.value); }
+
 BufferRef FrameGraph::importBuffer(std::string name, rhi::BufferHandle buffer, rhi::Access currentState) {
     return importBuffer(std::move(name), buffer, currentState, currentState);
 }
@@ -636,7 +638,11 @@ bool FrameGraph::compile() {
     cull();
     if (!allocate()) return false;
     placeBarriers();
-    return !m_failed;
+    if (m_failed) return false;
+    for (const ResourceNode& r : m_resources)
+        if (r.imported && r.type == ResourceType::Texture && m_persistent.count(r.importedTexture.value))
+            m_persistent[r.importedTexture.value] = r.endState;
+    return true;
 }
 
 void FrameGraph::cull() {
@@ -818,7 +824,7 @@ bool FrameGraph::allocate() {
             s.texture = best->handle;
             s.textureUsage = best->desc.usage;
             ++m_info.physicalTextureCount;
-            m_info.transientMemoryBytes += textureBytes(best->desc);
+            m_info.transientMemoryBytes += rhi::textureBytes(best->desc);
             for (uint32_t ri : s.resources) m_resources[ri].textureDesc.usage = s.textureUsage;
         } else {
             PooledBuffer* best = nullptr;

@@ -98,6 +98,7 @@
 #include <string>
 #include <string_view>
 #include <type_traits>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -308,6 +309,15 @@ public:
     BufferRef importBuffer(std::string name, rhi::BufferHandle buffer, rhi::Access currentState,
                            rhi::Access finalState);
 
+    // Persistent textures (render targets, histories, atlases kept across frames): the graph
+    // remembers the state every compiled frame leaves them in, so their owner never tracks it.
+    // importPersistent() imports with the remembered state (Access::None the first time) and
+    // leaves the texture in `finalState`; persistentState() is where the last compiled frame left
+    // it (e.g. for a readback); forgetPersistent() drops a destroyed texture.
+    TextureRef importPersistent(std::string name, rhi::TextureHandle texture, rhi::Access finalState);
+    rhi::Access persistentState(rhi::TextureHandle texture) const;
+    void forgetPersistent(rhi::TextureHandle texture);
+
     // Marks a result that must survive the frame: its producers are kept and (for transients) the
     // physical resource is not aliased after it. With finalState != None the resource is
     // transitioned to it at the end of the frame. Read the handle with physicalTexture() and the
@@ -508,6 +518,8 @@ private:
     // Reads `t` (blocking or not); nullopt when not available yet. Marks it returned.
     std::optional<FrameTimings> readTimings(TimingFrame& t, bool blocking);
     TimingFrame& currentTimingFrame() { return m_timingRing[m_frame % kTimingFramesInFlight]; }
+
+    std::unordered_map<uint32_t, rhi::Access> m_persistent;  // texture handle -> state
 
     TimingFrame m_timingRing[kTimingFramesInFlight];
     std::vector<FrameTimings> m_timingsReady;  // read early (pool reuse), returned by the next poll

@@ -1,2 +1,4 @@
+// deferred_lighting, vertex stage: the full-screen triangle.
 #version 450
+#pragma penumbra_variants ALBEDO
 #include "fullscreen.glsl"

@@ -1,2 +1,42 @@
+// gbuffer_mesh, fragment stage. Variant ALBEDO also writes the albedo target: the material's base
+// colour times its base-colour texture (a 1x1 white texture is bound for materials without one).
 #version 450
-#include "gbuffer_mesh_fs.glsl"
+#pragma penumbra_variants ALBEDO
+#include "scene.glsl"
+#include "gbuffer.glsl"
+
+#ifdef ALBEDO
+SCENE_MATERIALS;
+layout(set = 3, binding = 0) uniform sampler2D baseColorTexture;
+#endif
+
+layout(location = 0) in vec3 vNormal;
+layout(location = 1) in float vViewDepth;
+layout(location = 2) in vec4 vClip;
+layout(location = 3) in vec4 vPrevClip;
+layout(location = 4) in vec2 vUv;
+layout(location = 5) flat in uint vMaterial;
+
+layout(location = 0) out float outDepth;
+layout(location = 1) out vec2 outNormal;
+layout(location = 2) out vec4 outMaterial;
+layout(location = 3) out vec2 outVelocity;
+#ifdef ALBEDO
+layout(location = 4) out vec4 outAlbedo;
+#endif
+
+// Clip position -> pixel coordinates (x right, y down from the top row, pixel centres at +0.5).
+vec2 clipToPixel(vec4 clip) { return (clip.xy / clip.w * 0.5 + 0.5) * view.viewport.xy; }
+
+void main() {
+    outDepth = vViewDepth;
+    outNormal = octEncode(normalize(vNormal));
+    // Shadow and AO slots start unoccluded (1).
+    outMaterial = packMaterial(vMaterial, 1.0, 1.0);
+    // A point behind the previous camera has no previous pixel: no motion.
+    outVelocity = vPrevClip.w > 1e-6 ? clipToPixel(vClip) - clipToPixel(vPrevClip) : vec2(0.0);
+#ifdef ALBEDO
+    Material m = materials[vMaterial];
+    outAlbedo = vec4(m.baseColor.rgb * texture(baseColorTexture, vUv).rgb, 1.0);
+#endif
+}

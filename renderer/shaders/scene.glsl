@@ -1,19 +1,12 @@
-// Per-frame scene data of the rasterized mesh path (renderer/passes/gpu_scene.h mirrors these
-// layouts: std140 for the camera block, std430 for the storage buffers). Set 0 in every program.
-
-// Camera and frame constants (binding 0).
-layout(set = 0, binding = 0) uniform Frame {
-    mat4 viewProj;      // world -> Vulkan clip space (y down, depth 0..1)
-    mat4 prevViewProj;  // the previous frame's viewProj (velocity)
-    vec4 position;      // xyz camera position
-    vec4 forward;       // xyz unit view direction (linear depth = distance along it)
-    vec4 rayRight;      // xyz camera right / proj[0][0]: ray = forward + ndc.x * rayRight + ndc.y * rayUp
-    vec4 rayUp;         // xyz camera up / proj[1][1] (proj[1][1] < 0: NDC y = -1 is row 0)
-    vec4 viewport;      // width, height, 1 / width, 1 / height
-    vec4 ambient;       // rgb ambient radiance, w exposure
-    vec4 background;    // rgb background radiance
-    uvec4 params;       // x light count, y shading model, z tone mapper, w 1 = target encodes sRGB
-} frame;
+// Per-frame scene data shared by every program (renderer/features/gpu_scene.h holds the C++ side,
+// checked against shaderc's generated structs). Set 0 is the shared per-view block (view.glsl);
+// set 1 is the scene, with one layout in every program (a program declares the bindings it uses):
+//   set 1, binding 0  uniform Scene            ambient, background, light count, shading, tone map (SCENE_CONSTANTS)
+//   set 1, binding 1  readonly buffer Objects  Object[]   (SCENE_OBJECTS)
+//   set 1, binding 2  readonly buffer Materials Material[] (SCENE_MATERIALS)
+//   set 1, binding 3  readonly buffer Lights   Light[]    (SCENE_LIGHTS)
+// Set 2 holds a pass's own inputs, set 3 per-material resources.
+#include "view.glsl"
 
 struct Material {
     vec4 baseColor;      // linear rgb, a alpha (unused)
@@ -33,6 +26,19 @@ struct Object {
     mat4 normalMatrix;  // inverse transpose of the model's upper 3x3 (columns 0..2)
     uvec4 info;         // x material index (this frame's material array)
 };
+
+// The scene's bindings: a program writes e.g. `SCENE_CONSTANTS;` for each one it uses (a declared
+// binding is part of the program's reflection and must be bound, used or not).
+#define SCENE_CONSTANTS                                                                         \
+    layout(set = 1, binding = 0, std140) uniform Scene {                                        \
+        vec4 ambient;    /* rgb ambient radiance, w exposure */                                 \
+        vec4 background; /* rgb background radiance */                                         \
+        uvec4 params;    /* x lights, y shading model, z tone mapper, w 1 = target encodes sRGB */ \
+    }                                                                                           \
+    scene
+#define SCENE_OBJECTS layout(set = 1, binding = 1, std430) readonly buffer Objects { Object objects[]; }
+#define SCENE_MATERIALS layout(set = 1, binding = 2, std430) readonly buffer Materials { Material materials[]; }
+#define SCENE_LIGHTS layout(set = 1, binding = 3, std430) readonly buffer Lights { Light lights[]; }
 
 const uint kShadingCookTorrance = 0u;
 const uint kShadingBlinnPhong = 1u;

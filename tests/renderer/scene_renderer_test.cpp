@@ -18,8 +18,8 @@
 #include "engine/assets/asset_manager.h"
 #include "engine/ecs/components.h"
 #include "engine/ecs/world.h"
-#include "renderer/passes/gpu_scene.h"
-#include "renderer/passes/lighting_reference.h"
+#include "renderer/features/gpu_scene.h"
+#include "renderer/features/lighting_reference.h"
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
 #include "support/test_device.h"
@@ -713,7 +713,7 @@ TEST_P(SceneRendererTest, PassesFollowTheScene) {
     EXPECT_EQ(st.materials, 1u);
     EXPECT_EQ(st.memory.meshBuffers, 4u * sizeof(render::GpuVertex) + 6u * 4u)
         << "one copy of the shared mesh";
-    EXPECT_EQ(st.memory.sceneBuffers, sizeof(render::GpuFrame) + 1 * sizeof(render::GpuMaterial) +
+    EXPECT_EQ(st.memory.sceneBuffers, sizeof(render::GpuView) + sizeof(render::GpuScene) + 1 * sizeof(render::GpuMaterial) +
                                           1 * sizeof(render::GpuLight) + 2 * sizeof(render::GpuObject));
     EXPECT_EQ(st.memory.textures, 0u) << "no material has a texture";
     // Output + depth, normal, material, velocity (4 bytes per pixel each) + D32 depth; no albedo.
@@ -725,7 +725,7 @@ TEST_P(SceneRendererTest, PassesFollowTheScene) {
     for (auto [e, l] : s.world.view<ecs::Light>()) s.world.destroy(e);
     ASSERT_TRUE(s.render(r, d, error)) << error;
     EXPECT_EQ(r.lastFrameStats().lights, 0u);
-    EXPECT_EQ(r.lastFrameStats().memory.sceneBuffers, sizeof(render::GpuFrame) + sizeof(render::GpuMaterial) +
+    EXPECT_EQ(r.lastFrameStats().memory.sceneBuffers, sizeof(render::GpuView) + sizeof(render::GpuScene) + sizeof(render::GpuMaterial) +
                                                           sizeof(render::GpuLight) +
                                                           2 * sizeof(render::GpuObject));
 }

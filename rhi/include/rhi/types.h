@@ -199,6 +199,20 @@ struct TextureDesc {
     std::string debugName;
 };
 
+// Bytes of a texture's texel storage over all mips (3D mips halve in depth, array layers do not),
+// as memory reports count it.
+inline uint64_t textureBytes(const TextureDesc& d) {
+    const uint64_t texel = formatInfo(d.format).bytesPerTexel;
+    const bool is3D = d.dimension == TextureDimension::Tex3D;
+    uint64_t total = 0;
+    for (uint32_t m = 0; m < (d.mipLevels > 0 ? d.mipLevels : 1u); ++m) {
+        const uint64_t w = d.width >> m ? d.width >> m : 1u, h = d.height >> m ? d.height >> m : 1u;
+        const uint64_t z = is3D ? (d.depthOrLayers >> m ? d.depthOrLayers >> m : 1u) : (d.depthOrLayers ? d.depthOrLayers : 1u);
+        total += w * h * z * texel;
+    }
+    return total;
+}
+
 // Identifies one mip level; for Tex2DArray one layer (layer), for Tex3D the whole volume.
 struct TextureSubresource {
     uint32_t mip = 0;

@@ -1,0 +1,4 @@
+// debug_view, vertex stage: the full-screen triangle.
+#version 450
+#pragma penumbra_variants ALBEDO
+#include "fullscreen.glsl"
