@@ -16,11 +16,15 @@ endfunction()
 
 run(install ${CMAKE_COMMAND} --install ${BUILD_DIR} --prefix ${prefix})
 foreach(f lib/cmake/penumbra/penumbraConfig.cmake include/penumbra/engine/engine.h
-          include/penumbra/renderer/renderer.h include/penumbra/rhi/device.h bin/penumbra)
+          include/penumbra/renderer/renderer.h include/penumbra/rhi/device.h bin/penumbra
+          lib/penumbra/plugins/stl_importer.so)
   if(NOT EXISTS ${prefix}/${f})
     message(FATAL_ERROR "the install is missing ${f}")
   endif()
 endforeach()
+if(EXISTS ${prefix}/lib/penumbra/plugins/fixture_no_entry.so)
+  message(FATAL_ERROR "the install contains the plugin test fixtures")
+endif()
 # Nothing from the source or build tree may leak into the package.
 file(GLOB_RECURSE cmake_files ${prefix}/lib/cmake/penumbra/*.cmake)
 foreach(f ${cmake_files})
