@@ -126,6 +126,23 @@ inline bool checkBufferToTexture(uint64_t bufferSize, uint64_t offset, const Tex
     return true;
 }
 
+// The subresources a texture entry of a bind group views (see BindGroupEntry), resolved. False
+// (with the reason) if the mips or layers do not exist, or a storage entry names several mips.
+inline bool entryRange(const TextureDesc& desc, const BindGroupEntry& e, bool storage, TextureRange& out,
+                       std::string& why) {
+    const TextureRange asked{e.mip, storage ? 1u : (e.mipCount ? e.mipCount : kRemaining), e.baseLayer,
+                             e.layerCount ? e.layerCount : kRemaining};
+    if (storage && e.mipCount > 1) {
+        why = "a storage image binds one mip (mipCount " + std::to_string(e.mipCount) + ")";
+        return false;
+    }
+    if (resolveRange(desc, asked, out)) return true;
+    why = "mips " + std::to_string(e.mip) + " +" + std::to_string(e.mipCount) + ", layers " +
+          std::to_string(e.baseLayer) + " +" + std::to_string(e.layerCount) + " are outside the texture (" +
+          std::to_string(desc.mipLevels) + " mips, " + std::to_string(stateLayers(desc)) + " layers)";
+    return false;
+}
+
 // "mips 1..2, layers 0..5" / "mip 1, layer 0"; for messages.
 inline std::string describeRange(const TextureRange& r) {
     auto span = [](const char* one, const char* many, uint32_t base, uint32_t count) {

@@ -132,6 +132,7 @@ public:
     void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
                      uint32_t firstInstance) override;
     void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
+    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
     void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
     void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
     void pushDebugGroup(std::string_view name) override;
@@ -503,6 +504,22 @@ public:
         return readTimestampsImpl(pool, first, count, outNs, false);
     }
     DeviceStats stats() const override { return m_stats; }
+    // The null device records any use, so it claims what the format's kind allows: depth formats
+    // sample and are depth targets; colour formats sample, filter and blend unless integer, are
+    // storage images unless sRGB, colour targets and vertex attributes; R32_UINT has atomics;
+    // RGB32_FLOAT is a vertex format only.
+    FormatSupport formatSupport(Format format) const override {
+        if (format == Format::Undefined || format >= Format::Count) return FormatSupport::None;
+        const FormatInfo& fi = formatInfo(format);
+        if (format == Format::RGB32_FLOAT) return FormatSupport::VertexAttribute;
+        if (fi.isDepth) return FormatSupport::Sampled | FormatSupport::DepthTarget;
+        FormatSupport s =
+            FormatSupport::Sampled | FormatSupport::ColorTarget | FormatSupport::VertexAttribute;
+        if (!fi.isInteger) s |= FormatSupport::Filterable | FormatSupport::Blendable;
+        if (!fi.isSrgb) s |= FormatSupport::Storage;
+        if (format == Format::R32_UINT) s |= FormatSupport::StorageAtomic;
+        return s;
+    }
 
     bool readTimestampsImpl(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs,
                             bool wait) {
@@ -924,6 +941,17 @@ void NullCommandList::drawIndirect(BufferHandle args, uint64_t offset, uint32_t 
         return;
     }
     add(RecordedCommand::Kind::DrawIndirect).rec.counts[0] = drawCount;
+}
+
+void NullCommandList::drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) {
+    auto b = m_device.bufferRef(args, "drawIndexedIndirect");
+    if (!b) return;
+    if (drawCount > (uint64_t(1) << 32) / 20 ||
+        !rangeInside(offset, uint64_t(drawCount) * 20, b->desc.size)) {
+        m_device.error(NullDevice::rangeMessage("drawIndexedIndirect", *b, offset, uint64_t(drawCount) * 20));
+        return;
+    }
+    add(RecordedCommand::Kind::DrawIndexedIndirect).rec.counts[0] = drawCount;
 }
 
 void NullCommandList::resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) {

@@ -33,6 +33,7 @@ struct RecordedCommand {
         Draw,
         DrawIndexed,
         DrawIndirect,
+        DrawIndexedIndirect,
         ResetQueries,
         WriteTimestamp,
         PushDebugGroup,

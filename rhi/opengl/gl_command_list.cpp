@@ -533,6 +533,32 @@ void GlCommandList::drawIndirect(BufferHandle args, uint64_t offset, uint32_t dr
     });
 }
 
+void GlCommandList::drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) {
+    if (!checkGraphicsDraw("drawIndexedIndirect")) return;
+    if (!m_indexBound) {
+        error("drawIndexedIndirect: no index buffer is bound");
+        return;
+    }
+    GLuint name = 0;
+    // VkDrawIndexedIndirectCommand and GL's DrawElementsIndirectCommand share one 20-byte layout.
+    if (!checkIndirectBuffer(args, offset, uint64_t(drawCount) * 20, "drawIndexedIndirect", name)) return;
+    if (drawCount == 0) return;
+    m_commands.push_back([name, offset, drawCount](GlDevice& d) {
+        if (d.m_rs.indexOffset != 0) {
+            d.error("drawIndexedIndirect: the index buffer must be bound at offset 0");
+            return;
+        }
+        if (!d.prepareDraw()) return;
+        const PipelineObj& p = *d.m_rs.pipeline;
+        if (p.baseInstanceLocation >= 0) d.m_gl.ProgramUniform1i(p.program, p.baseInstanceLocation, 0);
+        d.m_gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, name);
+        d.m_gl.MultiDrawElementsIndirect(p.topology, d.m_rs.indexType,
+                                         reinterpret_cast<const void*>(uintptr_t(offset)), GLsizei(drawCount),
+                                         0);
+        d.m_gl.BindBuffer(GL_DRAW_INDIRECT_BUFFER, 0);
+    });
+}
+
 void GlCommandList::resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) {
     auto* p = m_device.m_queryPools.get(pool);
     if (!p) {

@@ -257,6 +257,7 @@ bool GlDevice::initialize() {
     l.timestampPeriodNs = 1.0;
     l.timestamps = true;
     l.conservativeDepth = true;
+    queryCapabilities();
 
     // Push constants: one reserved UBO.
     m_gl.CreateBuffers(1, &m_pushConstantUbo);
@@ -787,7 +788,17 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
                     error(where + " (" + slot->name + "): invalid or destroyed texture handle");
                     return {};
                 }
-                const TextureObj& tex = **tp;
+                TextureObj& tex = **tp;
+                TextureRange range;
+                std::string why;
+                if (!detail::entryRange(tex.desc, e, slot->type == BindingType::StorageTexture, range, why)) {
+                    error(where + " (" + slot->name + "): texture " + quoted(tex.desc.debugName) + ": " +
+                          why);
+                    return {};
+                }
+                const bool allLayers =
+                    range.baseLayer == 0 && range.layerCount == detail::stateLayers(tex.desc);
+                b.object = tex.name;
                 if (slot->type == BindingType::SampledTexture) {
                     auto* sp = m_samplers.get(e.sampler);
                     if (!sp) {
@@ -800,6 +811,8 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
                         return {};
                     }
                     b.sampler = (*sp)->name;
+                    if (range.baseMip != 0 || range.mipCount != tex.desc.mipLevels || !allLayers)
+                        b.object = rangeView(tex, range);
                 } else {
                     if (!any(tex.desc.usage & TextureUsage::Storage)) {
                         error(where + " (" + slot->name + "): texture " + quoted(tex.desc.debugName) +
@@ -814,6 +827,10 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
                     b.mip = GLint(e.mip);
                     b.layered = tex.desc.dimension == TextureDimension::Tex2D ? GL_FALSE : GL_TRUE;
                     b.imageFormat = tex.format.imageFormat;
+                    if (!allLayers) {  // a view of the layers; its level 0 is mip e.mip
+                        b.object = rangeView(tex, range);
+                        b.mip = 0;
+                    }
                 }
                 if (slot->textureDimension != tex.desc.dimension) {
                     error(where + " (" + slot->name +
@@ -822,7 +839,10 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
                           quoted(tex.desc.debugName) + " has");
                     return {};
                 }
-                b.object = tex.name;
+                if (!b.object) {
+                    error(where + " (" + slot->name + "): glTextureView failed");
+                    return {};
+                }
                 break;
             }
         }
@@ -832,6 +852,69 @@ BindGroupHandle GlDevice::createBindGroup(const BindGroupDesc& desc) {
     if (h) ++m_stats.bindGroupsCreated;
     if (!h) error(what + ": too many live bind groups");
     return h;
+}
+
+void GlDevice::queryCapabilities() {
+    GLint extensionCount = 0;
+    m_gl.GetIntegerv(GL_NUM_EXTENSIONS, &extensionCount);
+    bool subgroups = false;
+    for (GLint i = 0; i < extensionCount; ++i) {
+        const auto* name = reinterpret_cast<const char*>(m_gl.GetStringi(GL_EXTENSIONS, GLuint(i)));
+        if (name && std::string(name) == "GL_KHR_shader_subgroup") subgroups = true;
+    }
+    DeviceLimits& l = m_info.limits;
+    m_info.enabledFeatures.clear();
+    if (subgroups) {
+        m_info.enabledFeatures.emplace_back("GL_KHR_shader_subgroup");
+        GLint size = 0, stages = 0, features = 0;
+        m_gl.GetIntegerv(GL_SUBGROUP_SIZE_KHR, &size);
+        m_gl.GetIntegerv(GL_SUBGROUP_SUPPORTED_STAGES_KHR, &stages);
+        m_gl.GetIntegerv(GL_SUBGROUP_SUPPORTED_FEATURES_KHR, &features);
+        // GL_SUBGROUP_FEATURE_*_BIT_KHR and rhi::SubgroupOps share their bit order (basic .. quad).
+        l.subgroupSize = uint32_t(std::max(0, size));
+        l.subgroupOps = SubgroupOps(uint32_t(features) & 0xffu);
+        if (stages & GL_VERTEX_SHADER_BIT) l.subgroupStages |= ShaderStageFlags::Vertex;
+        if (stages & GL_FRAGMENT_SHADER_BIT) l.subgroupStages |= ShaderStageFlags::Fragment;
+        if (stages & GL_COMPUTE_SHADER_BIT) l.subgroupStages |= ShaderStageFlags::Compute;
+    }
+    for (uint32_t f = 1; f < uint32_t(Format::Count); ++f) {
+        const Format format = Format(f);
+        const FormatInfo& fi = formatInfo(format);
+        const TextureFormatGl tf = textureFormat(format);
+        FormatSupport s = FormatSupport::None;
+        if (vertexFormat(format).components != 0) s |= FormatSupport::VertexAttribute;
+        if (tf.internalFormat != 0) {
+            auto query = [&](GLenum pname) {
+                GLint v = 0;
+                m_gl.GetInternalformativ(GL_TEXTURE_2D, tf.internalFormat, pname, 1, &v);
+                return v;
+            };
+            if (query(GL_FRAGMENT_TEXTURE) != GL_NONE) s |= FormatSupport::Sampled;
+            if (query(GL_FILTER) != GL_NONE) s |= FormatSupport::Filterable;  // a support level, not a bool
+            if (tf.imageFormat != 0 && query(GL_SHADER_IMAGE_STORE) != GL_NONE) {
+                s |= FormatSupport::Storage;
+                // GL 4.5 image atomics operate on r32i / r32ui images only.
+                if (format == Format::R32_UINT) s |= FormatSupport::StorageAtomic;
+            }
+            if (!fi.isDepth && query(GL_COLOR_RENDERABLE) == GL_TRUE) {
+                s |= FormatSupport::ColorTarget;
+                if (!fi.isInteger) s |= FormatSupport::Blendable;
+            }
+            if (fi.isDepth && query(GL_DEPTH_RENDERABLE) == GL_TRUE) s |= FormatSupport::DepthTarget;
+        }
+        m_formatSupport[f] = s;
+    }
+}
+
+GLuint GlDevice::rangeView(TextureObj& t, const TextureRange& r) {
+    const std::array<uint32_t, 4> key{r.baseMip, r.mipCount, r.baseLayer, r.layerCount};
+    if (auto it = t.views.find(key); it != t.views.end()) return it->second;
+    GLuint view = 0;
+    m_gl.GenTextures(1, &view);  // glTextureView needs a name that was never bound
+    m_gl.TextureView(view, t.target, t.name, t.format.internalFormat, r.baseMip, r.mipCount, r.baseLayer,
+                     r.layerCount);
+    t.views.emplace(key, view);
+    return view;
 }
 
 QueryPoolHandle GlDevice::createQueryPool(const QueryPoolDesc& desc) {
@@ -880,9 +963,12 @@ void GlDevice::destroy(TextureHandle h) {
         return;
     }
     const GLuint name = (*obj)->name;
-    m_releases.push(releaseSerial(), [this, name] {
+    std::vector<GLuint> views;
+    for (const auto& [key, view] : (*obj)->views) views.push_back(view);
+    m_releases.push(releaseSerial(), [this, name, views] {
         purgeFramebuffers(name);
         m_gl.DeleteTextures(1, &name);
+        if (!views.empty()) m_gl.DeleteTextures(GLsizei(views.size()), views.data());
     });
 }
 

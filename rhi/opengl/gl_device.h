@@ -32,6 +32,7 @@ struct TextureObj {
     GLenum target = GL_TEXTURE_2D;
     TextureDesc desc;
     TextureFormatGl format;
+    std::map<std::array<uint32_t, 4>, GLuint> views;  // glTextureView per bind-group mip/layer range
 };
 
 struct SamplerObj {
@@ -163,6 +164,7 @@ public:
     void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
                      uint32_t firstInstance) override;
     void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
+    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
     void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
     void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
     void pushDebugGroup(std::string_view name) override;
@@ -245,6 +247,9 @@ public:
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
     bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
     DeviceStats stats() const override { return m_stats; }
+    FormatSupport formatSupport(Format format) const override {
+        return format < Format::Count ? m_formatSupport[size_t(format)] : FormatSupport::None;
+    }
 
     TextureHandle acquireBackbuffer() override;
     Format backbufferFormat() const override { return kBackbufferFormat; }
@@ -272,6 +277,10 @@ private:
     bool mergeLayout(std::vector<BindingSlot>& layout, const ShaderObj& shader,
                      const std::string& pipelineName);
     bool createBackbuffer(uint32_t width, uint32_t height);
+    // Subgroup limits (GL_KHR_shader_subgroup), format support and DeviceInfo::enabledFeatures.
+    void queryCapabilities();
+    // A texture view (glTextureView) of a resolved mip/layer range, created once per range.
+    GLuint rangeView(TextureObj& t, const TextureRange& r);
     void writeTextureImpl(TextureHandle dst, const TextureRegion& region, const void* data, uint64_t size,
                           const char* fn);
     // glTextureSubImage{2D,3D} of a resolved region from `pixels` (a pointer, or an offset into the
@@ -355,6 +364,7 @@ private:
     uint32_t m_backbufferHeight = 0;
     GLuint m_presentFbo = 0;
     DeviceStats m_stats;
+    std::array<FormatSupport, size_t(Format::Count)> m_formatSupport{};
 };
 
 }  // namespace rhi::gl

@@ -168,6 +168,7 @@ public:
     void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
                      uint32_t firstInstance) override;
     void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
+    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
     void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
     void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
     void pushDebugGroup(std::string_view name) override;
@@ -206,6 +207,7 @@ private:
     Format m_passDepthFormat = Format::Undefined;
     std::vector<bool> m_vertexBound;
     bool m_indexBound = false;
+    uint64_t m_indexOffset = 0;
     uint32_t m_debugDepth = 0;
 };
 
@@ -747,6 +749,7 @@ public:
     }
 
     DeviceStats stats() const override { return m_inner->stats(); }
+    FormatSupport formatSupport(Format format) const override { return m_inner->formatSupport(format); }
 
     // --- presentation ----------------------------------------------------------------------------
     TextureHandle acquireBackbuffer() override {
@@ -854,7 +857,8 @@ private:
                 report(fn, entryName + " is a SampledTexture binding but the entry has no sampler");
                 return false;
             }
-            return sampler(e.sampler, fn, "entry sampler") != nullptr;
+            return checkEntryRange(fn, entryName, texName, *tex, e, false) &&
+                   sampler(e.sampler, fn, "entry sampler") != nullptr;
         }
         if (!any(tex->desc.usage & TextureUsage::Storage)) {
             report(fn, entryName + " binds " + texName +
@@ -871,7 +875,16 @@ private:
                            texName + " has format " + formatInfo(tex->desc.format).name);
             return false;
         }
-        return true;
+        return checkEntryRange(fn, entryName, texName, *tex, e, true);
+    }
+
+    bool checkEntryRange(const char* fn, const std::string& entryName, const std::string& texName,
+                         const TextureInfo& tex, const BindGroupEntry& e, bool storage) {
+        TextureRange range;
+        std::string why;
+        if (entryRange(tex.desc, e, storage, range, why)) return true;
+        report(fn, entryName + " views " + texName + ": " + why);
+        return false;
     }
 
     void adoptTexture(TextureHandle h) {
@@ -1304,16 +1317,17 @@ void ValidationCommandList::checkResourceStates(const char* fn) {
             } else {
                 TextureInfo* tex = m_device.texture(e.texture, fn, "bind group entry");
                 if (!tex) continue;
+                TextureRange range;  // the subresources the entry views (checked at creation)
+                std::string why;
+                if (!entryRange(tex->desc, e, b->type == BindingType::StorageTexture, range, why)) continue;
                 if (b->type == BindingType::SampledTexture) {
-                    m_device.useTexture(fn, *tex, TextureRange{}, where, "is sampled", Access::ShaderSampled,
+                    m_device.useTexture(fn, *tex, range, where, "is sampled", Access::ShaderSampled,
                                         Access::ShaderSampled);
                 } else if (b->writes) {
-                    m_device.useTexture(fn, *tex, TextureRange{e.mip, 1, 0, kRemaining}, where,
-                                        "is written as a storage image", Access::ShaderWrite,
-                                        Access::ShaderWrite);
+                    m_device.useTexture(fn, *tex, range, where, "is written as a storage image",
+                                        Access::ShaderWrite, Access::ShaderWrite);
                 } else {
-                    m_device.useTexture(fn, *tex, TextureRange{e.mip, 1, 0, kRemaining}, where,
-                                        "is read as a storage image",
+                    m_device.useTexture(fn, *tex, range, where, "is read as a storage image",
                                         Access::ShaderRead | Access::ShaderWrite, Access::ShaderRead);
                 }
             }
@@ -1547,6 +1561,7 @@ void ValidationCommandList::bindIndexBuffer(BufferHandle buffer, IndexType type,
     }
     m_device.useBuffer(fn, *b, "", "is read as an index buffer", Access::IndexRead, Access::IndexRead, false);
     m_indexBound = true;
+    m_indexOffset = offset;
     m_inner.bindIndexBuffer(buffer, type, offset);
 }
 
@@ -1610,6 +1625,23 @@ void ValidationCommandList::drawIndirect(BufferHandle args, uint64_t offset, uin
     if (!checkIndirect(fn, args, offset, uint64_t(drawCount) * 16)) return;
     checkResourceStates(fn);
     m_inner.drawIndirect(args, offset, drawCount);
+}
+
+void ValidationCommandList::drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) {
+    const char* fn = "drawIndexedIndirect";
+    if (!checkDrawState(fn)) return;
+    if (!m_indexBound) {
+        m_device.report(fn, "no index buffer is bound");
+        return;
+    }
+    if (m_indexOffset != 0) {
+        m_device.report(fn, "the index buffer is bound at offset " + std::to_string(m_indexOffset) +
+                                "; indexed indirect draws need offset 0 (use firstIndex in the arguments)");
+        return;
+    }
+    if (!checkIndirect(fn, args, offset, uint64_t(drawCount) * 20)) return;
+    checkResourceStates(fn);
+    m_inner.drawIndexedIndirect(args, offset, drawCount);
 }
 
 void ValidationCommandList::resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) {

@@ -627,6 +627,28 @@ void VulkanCommandList::drawIndirect(BufferHandle args, uint64_t offset, uint32_
     vkCmdDrawIndirect(m_cmd, b->buffer, offset, drawCount, uint32_t(stride));
 }
 
+void VulkanCommandList::drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) {
+    if (!checkInsideRenderPass("drawIndexedIndirect") || !checkPipeline("drawIndexedIndirect", true)) return;
+    BufferRes* b = m_dev.buffer(args, "drawIndexedIndirect");
+    if (!b || drawCount == 0) return;
+    if (!(b->usage & VK_BUFFER_USAGE_INDIRECT_BUFFER_BIT)) {
+        error("drawIndexedIndirect: buffer '" + b->desc.debugName + "' lacks Indirect usage");
+        return;
+    }
+    constexpr uint64_t stride = sizeof(VkDrawIndexedIndirectCommand);
+    if (offset % 4 != 0 || offset > b->desc.size || (b->desc.size - offset) / stride < drawCount) {
+        error("drawIndexedIndirect: " + std::to_string(drawCount) + " draws at offset " +
+              std::to_string(offset) + " exceed the buffer (or the offset is not a multiple of 4)");
+        return;
+    }
+    if (drawCount > 1 && !m_dev.m_multiDrawIndirect) {
+        for (uint32_t i = 0; i < drawCount; ++i)
+            vkCmdDrawIndexedIndirect(m_cmd, b->buffer, offset + i * stride, 1, uint32_t(stride));
+        return;
+    }
+    vkCmdDrawIndexedIndirect(m_cmd, b->buffer, offset, drawCount, uint32_t(stride));
+}
+
 // ---------------------------------------------------------------------------------------------------
 // Queries and debugging
 // ---------------------------------------------------------------------------------------------------

@@ -357,49 +357,70 @@ bool VulkanDevice::createLogicalDevice() {
         return false;
     }
 
-    // Required features, plus optional ones the renderer's shaders may use when present.
+    // Required features, plus optional ones enabled only where queried as supported; their names
+    // go to DeviceInfo::enabledFeatures and the log.
     auto e13 =
         vkInit<VkPhysicalDeviceVulkan13Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_3_FEATURES);
     e13.synchronization2 = VK_TRUE;
     e13.dynamicRendering = VK_TRUE;
-    e13.maintenance4 = f13.maintenance4;
     auto e12 =
         vkInit<VkPhysicalDeviceVulkan12Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_2_FEATURES);
     e12.pNext = &e13;
     e12.timelineSemaphore = VK_TRUE;
-    e12.separateDepthStencilLayouts = f12.separateDepthStencilLayouts;
-    e12.hostQueryReset = f12.hostQueryReset;
-    e12.scalarBlockLayout = f12.scalarBlockLayout;
-    e12.uniformBufferStandardLayout = f12.uniformBufferStandardLayout;
-    e12.shaderFloat16 = f12.shaderFloat16;
-    e12.shaderInt8 = f12.shaderInt8;
-    e12.storageBuffer8BitAccess = f12.storageBuffer8BitAccess;
-    e12.drawIndirectCount = f12.drawIndirectCount;
     auto e11 =
         vkInit<VkPhysicalDeviceVulkan11Features>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_VULKAN_1_1_FEATURES);
     e11.pNext = &e12;
-    e11.shaderDrawParameters = f11.shaderDrawParameters;
-    e11.storageBuffer16BitAccess = f11.storageBuffer16BitAccess;
     auto e2 = vkInit<VkPhysicalDeviceFeatures2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_FEATURES_2);
     e2.pNext = &e11;
     const VkPhysicalDeviceFeatures& a = f2.features;
     VkPhysicalDeviceFeatures& e = e2.features;
-    e.independentBlend = a.independentBlend;
-    e.multiDrawIndirect = a.multiDrawIndirect;
-    e.drawIndirectFirstInstance = a.drawIndirectFirstInstance;
-    e.fragmentStoresAndAtomics = a.fragmentStoresAndAtomics;
-    e.vertexPipelineStoresAndAtomics = a.vertexPipelineStoresAndAtomics;
-    e.shaderStorageImageExtendedFormats = a.shaderStorageImageExtendedFormats;
-    e.shaderStorageImageReadWithoutFormat = a.shaderStorageImageReadWithoutFormat;
-    e.shaderStorageImageWriteWithoutFormat = a.shaderStorageImageWriteWithoutFormat;
-    e.shaderInt16 = a.shaderInt16;
-    e.shaderInt64 = a.shaderInt64;
-    e.shaderFloat64 = a.shaderFloat64;
-    e.depthClamp = a.depthClamp;
-    e.fillModeNonSolid = a.fillModeNonSolid;
-    e.samplerAnisotropy = a.samplerAnisotropy;
-    e.imageCubeArray = a.imageCubeArray;
-    e.shaderClipDistance = a.shaderClipDistance;
+    struct Optional {
+        const char* name;
+        VkBool32 supported;
+        VkBool32* enable;
+    };
+#define PENUMBRA_VK_OPTIONAL(queried, enabled, member) \
+    { #member, queried.member, &enabled.member }
+    const Optional optional[] = {
+        PENUMBRA_VK_OPTIONAL(f13, e13, maintenance4),
+        PENUMBRA_VK_OPTIONAL(f12, e12, separateDepthStencilLayouts),
+        PENUMBRA_VK_OPTIONAL(f12, e12, hostQueryReset),
+        PENUMBRA_VK_OPTIONAL(f12, e12, scalarBlockLayout),
+        PENUMBRA_VK_OPTIONAL(f12, e12, uniformBufferStandardLayout),
+        PENUMBRA_VK_OPTIONAL(f12, e12, shaderFloat16),
+        PENUMBRA_VK_OPTIONAL(f12, e12, shaderInt8),
+        PENUMBRA_VK_OPTIONAL(f12, e12, storageBuffer8BitAccess),
+        PENUMBRA_VK_OPTIONAL(f12, e12, drawIndirectCount),
+        PENUMBRA_VK_OPTIONAL(f11, e11, shaderDrawParameters),
+        PENUMBRA_VK_OPTIONAL(f11, e11, storageBuffer16BitAccess),
+        PENUMBRA_VK_OPTIONAL(a, e, independentBlend),
+        PENUMBRA_VK_OPTIONAL(a, e, multiDrawIndirect),
+        PENUMBRA_VK_OPTIONAL(a, e, drawIndirectFirstInstance),
+        PENUMBRA_VK_OPTIONAL(a, e, fragmentStoresAndAtomics),
+        PENUMBRA_VK_OPTIONAL(a, e, vertexPipelineStoresAndAtomics),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderStorageImageExtendedFormats),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderStorageImageReadWithoutFormat),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderStorageImageWriteWithoutFormat),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderInt16),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderInt64),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderFloat64),
+        PENUMBRA_VK_OPTIONAL(a, e, depthClamp),
+        PENUMBRA_VK_OPTIONAL(a, e, fillModeNonSolid),
+        PENUMBRA_VK_OPTIONAL(a, e, samplerAnisotropy),
+        PENUMBRA_VK_OPTIONAL(a, e, imageCubeArray),
+        PENUMBRA_VK_OPTIONAL(a, e, shaderClipDistance),
+    };
+#undef PENUMBRA_VK_OPTIONAL
+    m_info.enabledFeatures.clear();
+    std::string enabledList;
+    for (const Optional& o : optional) {
+        *o.enable = o.supported;
+        if (!o.supported) continue;
+        m_info.enabledFeatures.emplace_back(o.name);
+        enabledList += std::string(enabledList.empty() ? "" : " ") + o.name;
+    }
+    log(LogSeverity::Debug,
+        "optional device features enabled: " + (enabledList.empty() ? "none" : enabledList));
     m_separateDepthLayouts = f12.separateDepthStencilLayouts;
     m_independentBlend = a.independentBlend;
     m_multiDrawIndirect = a.multiDrawIndirect;
@@ -440,8 +461,11 @@ bool VulkanDevice::createLogicalDevice() {
 }
 
 void VulkanDevice::fillInfo() {
+    auto subgroup =
+        vkInit<VkPhysicalDeviceSubgroupProperties>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES);
     auto driver =
         vkInit<VkPhysicalDeviceDriverProperties>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES);
+    driver.pNext = &subgroup;
     auto props2 = vkInit<VkPhysicalDeviceProperties2>(VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2);
     props2.pNext = &driver;
     vkGetPhysicalDeviceProperties2(m_physical, &props2);
@@ -473,6 +497,36 @@ void VulkanDevice::fillInfo() {
     d.timestamps = l.timestampComputeAndGraphics == VK_TRUE && m_timestampValidBits > 0;
     // SPIR-V DepthGreater / DepthLess / DepthUnchanged execution modes are core Vulkan.
     d.conservativeDepth = true;
+    // VkSubgroupFeatureFlagBits and rhi::SubgroupOps share their bit order (basic .. quad).
+    d.subgroupSize = subgroup.subgroupSize;
+    d.subgroupOps = SubgroupOps(subgroup.supportedOperations & 0xffu);
+    if (subgroup.supportedStages & VK_SHADER_STAGE_VERTEX_BIT) d.subgroupStages |= ShaderStageFlags::Vertex;
+    if (subgroup.supportedStages & VK_SHADER_STAGE_FRAGMENT_BIT)
+        d.subgroupStages |= ShaderStageFlags::Fragment;
+    if (subgroup.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) d.subgroupStages |= ShaderStageFlags::Compute;
+
+    for (uint32_t f = 1; f < uint32_t(Format::Count); ++f) {
+        const VkFormat vf = toVkFormat(Format(f));
+        if (vf == VK_FORMAT_UNDEFINED) continue;
+        VkFormatProperties fp{};
+        vkGetPhysicalDeviceFormatProperties(m_physical, vf, &fp);
+        const VkFormatFeatureFlags t = fp.optimalTilingFeatures;
+        FormatSupport s = FormatSupport::None;
+        auto add = [&](bool has, FormatSupport bit) {
+            if (has) s |= bit;
+        };
+        add(t & VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT, FormatSupport::Sampled);
+        add(t & VK_FORMAT_FEATURE_SAMPLED_IMAGE_FILTER_LINEAR_BIT, FormatSupport::Filterable);
+        add(t & VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT, FormatSupport::Storage);
+        add(t & VK_FORMAT_FEATURE_STORAGE_IMAGE_ATOMIC_BIT, FormatSupport::StorageAtomic);
+        add(t & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT, FormatSupport::ColorTarget);
+        add(t & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BLEND_BIT, FormatSupport::Blendable);
+        add(t & VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT, FormatSupport::DepthTarget);
+        add(fp.bufferFeatures & VK_FORMAT_FEATURE_VERTEX_BUFFER_BIT, FormatSupport::VertexAttribute);
+        // RGB32_FLOAT is a vertex format only in the RHI (createTexture refuses it).
+        if (Format(f) == Format::RGB32_FLOAT) s &= FormatSupport::VertexAttribute;
+        m_formatSupport[f] = s;
+    }
 }
 
 rhi::vulkan::Inspection VulkanDevice::inspection() const {

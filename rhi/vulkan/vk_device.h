@@ -8,6 +8,7 @@
 
 #include <array>
 #include <deque>
+#include <map>
 #include <memory>
 #include <span>
 #include <string>
@@ -43,6 +44,7 @@ struct TextureRes {
     VkImageView sampledView = VK_NULL_HANDLE;                   // every mip and layer
     std::vector<VkImageView> storageViews;                      // one per mip (all layers / whole volume)
     std::unordered_map<uint32_t, VkImageView> attachmentViews;  // key: mip << 16 | layer
+    std::map<std::array<uint32_t, 4>, VkImageView> rangeViews;  // bind-group views of mip/layer ranges
     detail::SubresourceStates states;  // per mip and layer, as left by the last recorded barrier
     bool ownsImage = true;             // false for swapchain images (no memory, the swapchain owns them)
     bool backbuffer = false;           // handed out by acquireBackbuffer(): the device destroys it
@@ -106,6 +108,7 @@ struct BindGroupRes {
         VkDescriptorBufferInfo buffer{};
         VkDescriptorImageInfo image{};
         TextureHandle sampledTexture;  // valid for sampled-texture entries
+        TextureRange sampledRange;     // the mips and layers that entry views
     };
     std::vector<Write> writes;
     struct Variant {
@@ -154,6 +157,7 @@ public:
     void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
                      uint32_t firstInstance) override;
     void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
+    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
     void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
     void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
     void pushDebugGroup(std::string_view name) override;
@@ -242,6 +246,9 @@ public:
     bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
     bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
     DeviceStats stats() const override { return m_stats; }
+    FormatSupport formatSupport(Format format) const override {
+        return format < Format::Count ? m_formatSupport[size_t(format)] : FormatSupport::None;
+    }
 
     TextureHandle acquireBackbuffer() override;
     Format backbufferFormat() const override;
@@ -329,6 +336,8 @@ private:
     TextureRes* texture(TextureHandle h, const char* what);
     BufferRes* buffer(BufferHandle h, const char* what);
     VkImageView attachmentView(TextureRes& t, uint32_t mip, uint32_t layer);
+    // The image's full-dimension view of a resolved range, created once per range.
+    VkImageView rangeView(TextureRes& t, const TextureRange& r);
     VkImageView createView(TextureRes& t, VkImageViewType type, uint32_t baseMip, uint32_t mipCount,
                            uint32_t baseLayer, uint32_t layerCount);
     void releaseTexture(TextureRes& t);
@@ -417,6 +426,7 @@ private:
 
     Swapchain m_swapchain;
     DeviceStats m_stats;
+    std::array<FormatSupport, size_t(Format::Count)> m_formatSupport{};  // filled by fillInfo()
 };
 
 }  // namespace rhi::vk

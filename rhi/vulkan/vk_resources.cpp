@@ -174,8 +174,22 @@ VkImageView VulkanDevice::attachmentView(TextureRes& t, uint32_t mip, uint32_t l
     return view;
 }
 
+VkImageView VulkanDevice::rangeView(TextureRes& t, const TextureRange& r) {
+    const std::array<uint32_t, 4> key{r.baseMip, r.mipCount, r.baseLayer, r.layerCount};
+    if (auto it = t.rangeViews.find(key); it != t.rangeViews.end()) return it->second;
+    const VkImageViewType type = t.desc.dimension == TextureDimension::Tex3D ? VK_IMAGE_VIEW_TYPE_3D
+                                 : t.desc.dimension == TextureDimension::Tex2DArray
+                                     ? VK_IMAGE_VIEW_TYPE_2D_ARRAY
+                                     : VK_IMAGE_VIEW_TYPE_2D;
+    VkImageView v = createView(t, type, r.baseMip, r.mipCount, r.baseLayer, r.layerCount);
+    if (v) t.rangeViews.emplace(key, v);
+    return v;
+}
+
 void VulkanDevice::releaseTexture(TextureRes& t) {
     for (auto& [key, view] : t.attachmentViews) vkDestroyImageView(m_device, view, nullptr);
+    for (auto& [key, view] : t.rangeViews) vkDestroyImageView(m_device, view, nullptr);
+    t.rangeViews.clear();
     for (VkImageView v : t.storageViews) vkDestroyImageView(m_device, v, nullptr);
     if (t.sampledView) vkDestroyImageView(m_device, t.sampledView, nullptr);
     t.attachmentViews.clear();
@@ -837,6 +851,13 @@ BindGroupHandle VulkanDevice::createBindGroup(const BindGroupDesc& desc) {
                     return {};
                 }
                 VkDescriptorImageInfo ii{};
+                TextureRange range;
+                std::string why;
+                if (!detail::entryRange(t->desc, e, lb->type == BindingType::StorageTexture, range, why)) {
+                    logError(where + " ('" + lb->name + "'): texture '" + t->desc.debugName + "': " + why);
+                    return {};
+                }
+                const bool allLayers = range.baseLayer == 0 && range.layerCount == t->states.layers();
                 if (lb->type == BindingType::SampledTexture) {
                     const SamplerRes* s = m_samplers.get(e.sampler);
                     if (!s) {
@@ -849,9 +870,11 @@ BindGroupHandle VulkanDevice::createBindGroup(const BindGroupDesc& desc) {
                         return {};
                     }
                     ii.sampler = s->sampler;
-                    ii.imageView = t->sampledView;
+                    ii.imageView = range == t->states.whole() ? t->sampledView : rangeView(*t, range);
+                    if (!ii.imageView) return {};
                     ii.imageLayout = kSampledLayout;
                     w.sampledTexture = e.texture;
+                    w.sampledRange = range;
                 } else {
                     if (t->storageViews.empty()) {
                         logError(where + " ('" + lb->name + "'): texture '" + t->desc.debugName +
@@ -863,7 +886,8 @@ BindGroupHandle VulkanDevice::createBindGroup(const BindGroupDesc& desc) {
                                  std::to_string(t->storageViews.size()) + " levels)");
                         return {};
                     }
-                    ii.imageView = t->storageViews[e.mip];
+                    ii.imageView = allLayers ? t->storageViews[e.mip] : rangeView(*t, range);
+                    if (!ii.imageView) return {};
                     ii.imageLayout = VK_IMAGE_LAYOUT_GENERAL;
                 }
                 w.image = ii;
@@ -961,7 +985,11 @@ VkDescriptorSet VulkanDevice::descriptorSetFor(BindGroupRes& g) {
     for (const BindGroupRes::Write& w : g.writes) {
         if (!w.sampledTexture) continue;
         const TextureRes* t = m_textures.get(w.sampledTexture);
-        if (sampledIndex < 64 && t && layoutOf(*t, t->states.get(0, 0)) == VK_IMAGE_LAYOUT_GENERAL)
+        // The viewed subresources share one layout when the group is bound correctly (the
+        // validation wrapper checks that); the first one decides.
+        const Access state =
+            t ? t->states.get(w.sampledRange.baseMip, w.sampledRange.baseLayer) : Access::None;
+        if (sampledIndex < 64 && t && layoutOf(*t, state) == VK_IMAGE_LAYOUT_GENERAL)
             mask |= uint64_t(1) << sampledIndex;
         ++sampledIndex;
     }

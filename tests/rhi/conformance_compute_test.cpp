@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <shaders/conf_busy.h>
+#include <shaders/conf_image_atomics.h>
 #include <shaders/conf_storage_mip.h>
 #include <shaders/conf_storage_rgba32f.h>
 #include <shaders/conf_storage_rgba8_r32ui.h>
@@ -210,6 +211,48 @@ TEST_P(ConformanceQueries, TimestampsIncrease) {
     EXPECT_LT(ns[kStamps - 1] - ns[0], 10'000'000'000ull);
     std::printf("[ %s ] timestamps: %.3f ms across 5 dispatches\n", toString(GetParam()),
                 double(ns[kStamps - 1] - ns[0]) * 1e-6);
+}
+
+// imageAtomicAdd / imageAtomicMax on R32_UINT storage images, which both backends report as
+// FormatSupport::StorageAtomic: 1024 invocations hit 16 texels 64 times each.
+TEST_P(ConformanceCompute, ImageAtomicsOnR32ui) {
+    // Metric: R32_UINT supports storage atomics. Threshold: flag set.
+    ASSERT_TRUE(any(dev().formatSupport(Format::R32_UINT) & FormatSupport::StorageAtomic));
+    const uint32_t kInvocations = 1024;
+    const TextureUsage usage = TextureUsage::Storage | TextureUsage::CopyDst | TextureUsage::CopySrc;
+    TextureHandle counts = makeTexture2D(Format::R32_UINT, 4, 4, usage);
+    TextureHandle maxima = makeTexture2D(Format::R32_UINT, 4, 4, usage);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_image_atomics::compute());
+    ASSERT_TRUE(counts.isValid() && maxima.isValid() && pipeline.isValid());
+    const std::vector<uint32_t> zeros(16, 0);
+    dev().writeTexture(counts, {}, zeros.data(), 64);
+    dev().writeTexture(maxima, {}, zeros.data(), 64);
+    BindGroupHandle group = makeBindGroup(
+        pipeline, 0, {BindGroupEntry::makeStorage(0, counts), BindGroupEntry::makeStorage(1, maxima)});
+    ASSERT_TRUE(group.isValid());
+    const Access rw = Access::ShaderRead | Access::ShaderWrite;
+    const uint32_t info[4] = {kInvocations, 0, 0, 0};
+    CommandList& cmd = dev().beginCommandList("image atomics");
+    const Barrier before[] = {Barrier::tex(counts, Access::ShaderSampled, rw),
+                              Barrier::tex(maxima, Access::ShaderSampled, rw)};
+    cmd.barrier(before);
+    cmd.bindPipeline(pipeline);
+    cmd.bindGroup(0, group);
+    cmd.pushConstants(info, sizeof(info));
+    cmd.dispatch(kInvocations / 64);
+    const Barrier after[] = {Barrier::tex(counts, rw, Access::CopySrc),
+                             Barrier::tex(maxima, rw, Access::CopySrc)};
+    cmd.barrier(after);
+    submitAndWait(cmd);
+    const std::vector<uint32_t> c = readTextureAs<uint32_t>(counts, {}, Access::CopySrc);
+    const std::vector<uint32_t> m = readTextureAs<uint32_t>(maxima, {}, Access::CopySrc);
+    ASSERT_EQ(c.size(), 16u);
+    ASSERT_EQ(m.size(), 16u);
+    for (uint32_t t = 0; t < 16; ++t) {
+        // Metric: 64 atomic adds per texel; the maximum of the invocation ids that hit it. Threshold: exact.
+        EXPECT_EQ(c[t], kInvocations / 16) << "texel " << t;
+        EXPECT_EQ(m[t], kInvocations - 16 + t) << "texel " << t;
+    }
 }
 
 // tryReadTimestamps never waits: false while a query has no result, the values once it has, and

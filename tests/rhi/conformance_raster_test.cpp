@@ -515,6 +515,64 @@ TEST_P(ConformanceRaster, DrawIndirectTwoDraws) {
     }
 }
 
+// drawIndexedIndirect with two 20-byte records (firstIndex and vertexOffset differ) written by
+// updateBuffer at a non-zero offset in the same command list.
+TEST_P(ConformanceRaster, DrawIndexedIndirectTwoDraws) {
+    const uint32_t kW = 16, kH = 8;
+    struct Vertex {
+        float pos[3];
+        float color[4];
+    };
+    std::vector<Vertex> vertices;
+    auto quad = [&](float x0, float x1, std::array<float, 4> c) {
+        const float corners[4][2] = {{x0, -1}, {x1, -1}, {x0, 1}, {x1, 1}};
+        for (auto& p : corners) vertices.push_back({{p[0], p[1], 0.5f}, {c[0], c[1], c[2], c[3]}});
+    };
+    quad(-1.0f, -0.25f, {0, 0, 1, 1});  // columns 0..5 blue
+    quad(0.25f, 1.0f, {1, 1, 0, 1});    // columns 10..15 yellow
+    const std::vector<uint16_t> indices = {0, 1, 2, 2, 1, 3, 0, 1, 2, 2, 1, 3};
+    BufferHandle vb = makeBufferFrom(vertices, BufferUsage::Vertex);
+    BufferHandle ib = makeBufferFrom(indices, BufferUsage::Index);
+    BufferHandle args = makeBuffer(64, BufferUsage::Indirect | BufferUsage::CopyDst);
+    TextureHandle target = makeColorTarget(kW, kH);
+    GraphicsPipelineDesc desc = rectPipelineDesc({Format::RGBA8_UNORM});
+    desc.vertexBuffers = {{sizeof(Vertex), false}};
+    desc.vertexAttributes = {{0, 0, Format::RGB32_FLOAT, 0}, {1, 0, Format::RGBA32_FLOAT, 12}};
+    PipelineHandle pipeline = makeGraphicsPipeline(desc, penumbra::shaders::conf_mesh::vertex(),
+                                                   penumbra::shaders::conf_mesh::fragment());
+    ASSERT_TRUE(vb.isValid() && ib.isValid() && args.isValid() && target.isValid() && pipeline.isValid());
+
+    // {indexCount, instanceCount, firstIndex, vertexOffset, firstInstance} x 2, at byte offset 20.
+    const uint32_t records[10] = {6, 1, 0, 0, 0, 6, 1, 6, 4, 0};
+    CommandList& cmd = dev().beginCommandList("draw indexed indirect");
+    cmd.updateBuffer(args, 20, records, sizeof(records));
+    cmd.barrier(Barrier::buf(args, Access::CopyDst, Access::IndirectRead));
+    cmd.barrier(Barrier::tex(target, Access::None, Access::ColorTarget));
+    RenderPassDesc pass;
+    pass.colorAttachments = {colorAttachment(target, LoadOp::Clear, {0, 0, 0, 1})};
+    cmd.beginRenderPass(pass);
+    setFullViewport(cmd, kW, kH);
+    cmd.bindPipeline(pipeline);
+    cmd.bindVertexBuffer(0, vb);
+    cmd.bindIndexBuffer(ib, IndexType::Uint16);
+    cmd.drawIndexedIndirect(args, 20, 2);
+    cmd.endRenderPass();
+    cmd.barrier(Barrier::tex(target, Access::ColorTarget, Access::CopySrc));
+    submitAndWait(cmd);
+
+    const std::vector<uint8_t> image = readTexture(target, {}, Access::CopySrc);
+    ASSERT_EQ(image.size(), size_t(kW) * kH * 4);
+    for (uint32_t y = 0; y < kH; ++y) {
+        for (uint32_t x = 0; x < kW; ++x) {
+            const Rgba8 expected = x < 6     ? Rgba8{0, 0, 255, 255}
+                                   : x >= 10 ? Rgba8{255, 255, 0, 255}
+                                             : Rgba8{0, 0, 0, 255};
+            // Metric: both indexed indirect draws rendered their quad, nothing in between. Threshold: exact.
+            expectRgbaNear(pixel(image, kW, x, y), expected, 0, x, y);
+        }
+    }
+}
+
 // Per-vertex and per-instance vertex buffers (bound at an offset), a normalised RGBA8 attribute and
 // firstInstance.
 TEST_P(ConformanceRaster, InstancedDrawWithPerInstanceAttributes) {

@@ -940,6 +940,52 @@ TEST_F(ValidationTest, RegionWritesAndCopiesAreChecked) {
     dev().submit(list);
 }
 
+TEST_F(ValidationTest, BindGroupMipRangesAreCheckedAndTracked) {
+    // Criterion: a sampled view past the last mip is refused at creation; a view of mip 0 only is
+    // not affected by mip 1 being in ShaderWrite, while a view of both mips is reported.
+    rhi::TextureHandle t =
+        makeTexture("pyramid", rhi::Format::R32_FLOAT, TextureUsage::Sampled | TextureUsage::Storage, 16, 2);
+    rhi::PipelineHandle pipeline = makeComputePipeline();
+    rhi::BufferHandle results = makeBuffer("results", 256);
+    rhi::TextureHandle out = makeTexture("outImage");
+    rhi::SamplerHandle sampler = makeSampler();
+    auto group = [&](uint32_t baseMip, uint32_t mipCount) {
+        rhi::BindGroupDesc g;
+        g.pipeline = pipeline;
+        g.entries = {rhi::BindGroupEntry::makeBuffer(0, results), rhi::BindGroupEntry::makeStorage(1, out),
+                     rhi::BindGroupEntry::makeSampledMips(2, t, sampler, baseMip, mipCount)};
+        g.debugName = "mips";
+        return dev().createBindGroup(g);
+    };
+    EXPECT_FALSE(group(1, 2).isValid());
+    expectExactError(
+        "validation: createBindGroup: bind group 'mips' (pipeline 'compute', set 0) binding 2 ('inputTex') "
+        "views texture 'pyramid': mips 1 +2, "
+        "layers 0 "
+        "+0 are outside the texture (2 mips, 1 layers)");
+    rhi::BindGroupHandle mip0 = group(0, 1), both = group(0, 0);
+    rhi::BindGroupDesc g1;
+    g1.pipeline = pipeline;
+    g1.set = 1;
+    g1.entries = {rhi::BindGroupEntry::makeBuffer(0, makeBuffer("params", 64))};
+    rhi::BindGroupHandle set1 = dev().createBindGroup(g1);
+    rhi::CommandList& list = dev().beginCommandList();
+    list.barrier(rhi::Barrier::tex(out, Access::None, Access::ShaderWrite));
+    list.barrier(rhi::Barrier::tex(t, Access::None, Access::ShaderSampled, rhi::TextureRange{0, 1}));
+    list.barrier(rhi::Barrier::tex(t, Access::None, Access::ShaderWrite, rhi::TextureRange{1, 1}));
+    list.bindPipeline(pipeline);
+    list.bindGroup(1, set1);
+    list.bindGroup(0, mip0);
+    list.dispatch(1);
+    expectNoNewErrors();
+    list.bindGroup(0, both);
+    list.dispatch(1);
+    expectExactError(
+        "validation: dispatch: texture 'pyramid' (mip 1, layer 0) (set 0, binding 2) is sampled but its "
+        "state is ShaderWrite; add a barrier ShaderWrite -> ShaderSampled");
+    dev().submit(list);
+}
+
 TEST_F(ValidationTest, ReadTextureNeedsTheTrackedState) {
     rhi::TextureHandle t = makeTexture("t");
     std::vector<uint8_t> texels(16 * 16 * 4, 7), out;

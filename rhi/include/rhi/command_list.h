@@ -71,6 +71,11 @@ public:
                              int32_t vertexOffset = 0, uint32_t firstInstance = 0) = 0;
     // VK: vkCmdDrawIndirect   GL: glMultiDrawArraysIndirect
     virtual void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) = 0;
+    // drawCount indexed draws whose arguments (20-byte VkDrawIndexedIndirectCommand /
+    // DrawElementsIndirectCommand records) start at `offset`; args in Access::IndirectRead, created
+    // with BufferUsage::Indirect. The index buffer must be bound at offset 0 (GL has no base offset).
+    // VK: vkCmdDrawIndexedIndirect   GL: glMultiDrawElementsIndirect
+    virtual void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) = 0;
 
     // --- queries and debugging -----------------------------------------------------------------
     // VK: vkCmdResetQueryPool   GL: no-op (query objects are overwritten)

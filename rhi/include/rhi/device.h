@@ -120,6 +120,11 @@ public:
     // GL: glGetQueryObjectui64v(GL_QUERY_RESULT_AVAILABLE), then GL_QUERY_RESULT
     virtual bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) = 0;
 
+    // --- capabilities ----------------------------------------------------------------------------
+    // What the device supports for `format` (textures: optimal tiling).
+    // VK: vkGetPhysicalDeviceFormatProperties   GL: glGetInternalformativ (+ the GL image-unit rules)
+    virtual FormatSupport formatSupport(Format format) const = 0;
+
     // --- statistics ------------------------------------------------------------------------------
     // Counters since creation (VK and GL: kept by the backend; the validation wrapper forwards).
     virtual DeviceStats stats() const = 0;

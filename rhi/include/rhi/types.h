@@ -380,10 +380,15 @@ struct BindGroupEntry {
     BufferHandle buffer;
     uint64_t offset = 0;
     uint64_t size = 0;  // 0 = whole buffer from offset
-    // Textures (SampledTexture needs sampler too; StorageTexture binds `mip`)
+    // Textures (SampledTexture needs sampler too). A SampledTexture sees mips [mip, mip + mipCount)
+    // as its levels 0.. (mipCount 0: to the last mip); a StorageTexture binds the one level `mip`.
+    // Both see layers [baseLayer, baseLayer + layerCount) of a Tex2DArray (layerCount 0: to the last).
     TextureHandle texture;
     SamplerHandle sampler;
     uint32_t mip = 0;
+    uint32_t mipCount = 0;
+    uint32_t baseLayer = 0;
+    uint32_t layerCount = 0;
 
     static BindGroupEntry makeBuffer(uint32_t binding, BufferHandle b, uint64_t offset = 0, uint64_t size = 0) {
         BindGroupEntry e;
@@ -398,6 +403,14 @@ struct BindGroupEntry {
         e.binding = binding;
         e.texture = t;
         e.sampler = s;
+        return e;
+    }
+    // A sampled view of `mipCount` mips from `baseMip` (e.g. read mip N while mip N + 1 is written).
+    static BindGroupEntry makeSampledMips(uint32_t binding, TextureHandle t, SamplerHandle s,
+                                          uint32_t baseMip, uint32_t mipCount = 1) {
+        BindGroupEntry e = makeSampled(binding, t, s);
+        e.mip = baseMip;
+        e.mipCount = mipCount;
         return e;
     }
     static BindGroupEntry makeStorage(uint32_t binding, TextureHandle t, uint32_t mip = 0) {
@@ -502,6 +515,36 @@ struct DeviceDesc {
     LogCallback log;                  // null = messages go to stderr
 };
 
+// What a device can do with a format (Device::formatSupport).
+enum class FormatSupport : uint32_t {
+    None = 0,
+    Sampled = 1 << 0,          // SampledTexture bindings
+    Filterable = 1 << 1,       // Filter::Linear sampling
+    Storage = 1 << 2,          // StorageTexture bindings (imageLoad / imageStore)
+    StorageAtomic = 1 << 3,    // imageAtomic* on storage images
+    ColorTarget = 1 << 4,      // colour attachment
+    Blendable = 1 << 5,        // colour attachment with blending
+    DepthTarget = 1 << 6,      // depth attachment
+    VertexAttribute = 1 << 7,  // vertex buffer attribute
+};
+RHI_ENUM_FLAGS(FormatSupport)
+std::string toString(FormatSupport s);  // "sampled|filterable|storage" / "none"
+
+// Subgroup operation classes (GLSL GL_KHR_shader_subgroup_*), as Vulkan / GL report them.
+enum class SubgroupOps : uint32_t {
+    None = 0,
+    Basic = 1 << 0,
+    Vote = 1 << 1,
+    Arithmetic = 1 << 2,
+    Ballot = 1 << 3,
+    Shuffle = 1 << 4,
+    ShuffleRelative = 1 << 5,
+    Clustered = 1 << 6,
+    Quad = 1 << 7,
+};
+RHI_ENUM_FLAGS(SubgroupOps)
+std::string toString(SubgroupOps ops);  // "basic|vote|arithmetic" / "none"
+
 struct DeviceLimits {
     uint32_t maxTextureSize2D = 0;
     uint32_t maxTextureSize3D = 0;
@@ -517,6 +560,9 @@ struct DeviceLimits {
     double timestampPeriodNs = 1.0;  // nanoseconds per timestamp tick (already applied by readTimestamps)
     bool timestamps = false;
     bool conservativeDepth = false;
+    uint32_t subgroupSize = 0;  // 0: subgroups unavailable
+    SubgroupOps subgroupOps = SubgroupOps::None;
+    ShaderStageFlags subgroupStages = ShaderStageFlags::None;  // stages that support subgroup ops
 };
 
 // What a device has done since it was created (Device::stats()), for tests and tools: creations
@@ -535,6 +581,9 @@ struct DeviceInfo {
     std::string driverVersion;  // "Mesa 22.3.6"
     std::string platform;       // "headless", "EGL surfaceless", "OSMesa", "GLFW window"
     DeviceLimits limits;
+    // Optional capabilities in use. Vulkan: the optional device features it enabled, each only after
+    // querying it as supported ("independentBlend", ...). OpenGL: the extensions it relies on.
+    std::vector<std::string> enabledFeatures;
 };
 
 }  // namespace rhi
