@@ -127,9 +127,10 @@ struct SceneRenderer::Impl {
     // the last frame
     SceneFrameData frameData;  // read by scene_upload's execute
     FrameStats stats;
-    std::vector<fg::FrameTimings> completedTimings;  // polled, not yet taken
-    uint64_t lastFrameNumber = 0;                    // frame-graph number of the last frame
-    uint64_t statsFrameNumber = 0;                   // the frame stats.passes belongs to
+    std::vector<fg::FrameTimings> completedTimings;      // polled, not yet taken
+    uint64_t submitted[fg::kTimingFramesInFlight] = {};  // submission serial per frame slot
+    uint64_t lastFrameNumber = 0;                        // frame-graph number of the last frame
+    uint64_t statsFrameNumber = 0;                       // the frame stats.passes belongs to
     std::string graphviz;
     bool haveFrame = false;
     bool lastOwnOutput = false;
@@ -217,9 +218,13 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
         return false;
     }
     s.graphviz = s.graph.toGraphviz();
+    // At most kTimingFramesInFlight - 1 frames run ahead of the GPU: the frame that last used this
+    // frame's slot (timestamps, per-frame buffers) has finished, so nothing below waits for it.
+    uint64_t& slotSerial = s.submitted[s.graph.frameNumber() % fg::kTimingFramesInFlight];
+    if (slotSerial) s.device.waitForSubmission(slotSerial);
     rhi::CommandList& cmd = s.device.beginCommandList("scene.frame");
     s.graph.execute(cmd);
-    s.device.submit(cmd);
+    slotSerial = s.device.submit(cmd);
     s.lastFrameNumber = s.graph.frameNumber();
     s.gpuCache.endFrame();
     s.finishFrame(desc, cam, g, transientBytes);
@@ -540,10 +545,20 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     gb = {importTarget(kDepth), importTarget(kNormal), importTarget(kMaterial), importTarget(kVelocity),
           g.albedo ? importTarget(kAlbedo) : fg::TextureRef{}};
     const uint64_t transientBytes = addMeshGBuffer(fc, importDraws(g));
-    if (desc.debugView != DebugView::None)
-        addDebugView(fc, desc.debugView, cam.farPlane);
-    else
+    if (desc.debugView != DebugView::None) {
+        // The depth view spans the camera to the farthest drawn mesh's bounding sphere.
+        float farthest = 0.0f;
+        for (size_t i = 0; i < g.sources.size(); ++i) {
+            const glm::mat4& m = g.sources[i].model;
+            const float scale = std::max(
+                {glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))});
+            farthest = std::max(
+                farthest, glm::dot(glm::vec3(m[3]) - cam.eye, -cam.zAxis) + scale * g.gpuMeshes[i]->radius);
+        }
+        addDebugView(fc, desc.debugView, std::clamp(farthest, 1e-6f, cam.farPlane));
+    } else {
         addLighting(fc);
+    }
     return transientBytes;
 }
 

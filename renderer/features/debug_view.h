@@ -1,7 +1,8 @@
 // Feature "debug_view": the full-screen pass "debug_view" that shows one G-buffer channel in the
 // output instead of the lit image (`penumbra render --debug-view normals|depth|albedo`):
 //   normals  world normal * 0.5 + 0.5
-//   depth    white at the camera, black at depthRange (the camera's far plane) and where nothing is hit
+//   depth    white at the camera, black at depthRange (the scene renderer passes the far side of the
+//            farthest drawn mesh's bounding sphere) and where nothing is hit
 //   albedo   base colour (the albedo target when the frame has one, else the material's colour)
 // It is the worked example of docs/ARCHITECTURE.md, "How to add a pass".
 #pragma once

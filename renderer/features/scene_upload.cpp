@@ -1,9 +1,11 @@
 #include "renderer/features/scene_upload.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstddef>
 
 #include <fmt/format.h>
+#include <glm/geometric.hpp>
 
 #include <shaders/deferred_lighting.h>
 #include <shaders/gbuffer_mesh.h>
@@ -128,11 +130,14 @@ const GpuMesh* GpuAssetCache::mesh(assets::AssetId id, const assets::MeshData& d
         v.uv[0] = hasUvs ? data.uvs[i].x : 0.0f;
         v.uv[1] = hasUvs ? data.uvs[i].y : 0.0f;
     }
+    float radius2 = 0.0f;
+    for (const glm::vec3& p : data.positions) radius2 = std::max(radius2, glm::dot(p, p));
 
     GpuMesh m;
     m.source = &data;
     m.vertexCount = uint32_t(vertexCount);
     m.indexCount = uint32_t(data.indices.size());
+    m.radius = std::sqrt(radius2);
     using BU = rhi::BufferUsage;
     rhi::BufferDesc vertexDesc{uint64_t(vertexCount) * sizeof(GpuVertex), BU::Vertex | BU::CopyDst,
                                rhi::MemoryType::GpuOnly, fmt::format("mesh.{:016x}.vertices", id)};

@@ -22,6 +22,7 @@ struct GpuMesh {
     uint32_t vertexCount = 0;
     uint32_t indexCount = 0;
     uint64_t bytes = 0;                        // both buffers' sizes
+    float radius = 0.0f;                       // largest vertex distance from the mesh origin
     const assets::MeshData* source = nullptr;  // the asset it was made from (detects replacement)
 };
 

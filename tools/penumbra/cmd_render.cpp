@@ -39,6 +39,18 @@ struct PassSeries {
     std::vector<double> gpu, cpu;
 };
 
+// Appends every frame's pass timings to the per-pass series (first appearance order).
+void addTimings(std::vector<PassSeries>& series, const std::vector<fg::FrameTimings>& frames) {
+    for (const fg::FrameTimings& f : frames)
+        for (const fg::PassTiming& t : f.passes) {
+            auto it = std::find_if(series.begin(), series.end(),
+                                   [&](const PassSeries& s) { return s.name == t.name; });
+            if (it == series.end()) it = series.insert(series.end(), PassSeries{t.name, {}, {}});
+            it->gpu.push_back(t.gpuMs);
+            it->cpu.push_back(t.cpuMs);
+        }
+}
+
 nlohmann::json jsonNumber(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
 }  // namespace
@@ -83,6 +95,9 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"cook-torrance", "blinn-phong"}));
     cmd->add_option("--tone-mapper", opt.toneMapper, "Override the scene's tone mapper")
         ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
+    cmd->add_option("--debug-view", opt.debugView,
+                    "Show a G-buffer channel instead of the lit image: normals | depth | albedo (none: lit)")
+        ->check(CLI::IsMember({"none", "normals", "depth", "albedo"}));
     return cmd;
 }
 
@@ -93,6 +108,7 @@ int runRender(const RenderOptions& opt) {
     rendererDesc.validation = opt.validation;
     rendererDesc.width = opt.width;
     rendererDesc.height = opt.height;
+    render::parseDebugView(opt.debugView, rendererDesc.debugView);
     if (!chooseBackend(opt.backend, "render", rendererDesc.backend, error)) {
         log::error("{}", error);
         return 2;
@@ -165,16 +181,12 @@ int runRender(const RenderOptions& opt) {
             log::error("{}: frame {}: {}", opt.scene, frame, error);
             return 1;
         }
-        for (const fg::PassTiming& t : renderer->stats().passes) {
-            auto it = std::find_if(series.begin(), series.end(),
-                                   [&](const PassSeries& s) { return s.name == t.name; });
-            if (it == series.end()) it = series.insert(series.end(), PassSeries{t.name, {}, {}});
-            it->gpu.push_back(t.gpuMs);
-            it->cpu.push_back(t.cpuMs);
-        }
+        // GPU timings come back a few frames late; the loop never waits for them.
+        addTimings(series, renderer->takeTimings(false));
         if (opt.frames > 1 && (frame + 1) % 10 == 0)
             fmt::print(stderr, "frame {}/{}\n", frame + 1, opt.frames);
     }
+    addTimings(series, renderer->takeTimings(true));  // the frames still in flight
 
     ImageRGBA8 image;
     if (!renderer->readPixels(image, error)) {

@@ -26,9 +26,10 @@ struct RenderOptions {
     std::string graphviz;
     std::string cacheDir;  // empty: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra or ~/.cache/penumbra
     bool noCache = false;
-    std::string pluginDir;   // empty: none
-    std::string shading;     // override: cook-torrance | blinn-phong
-    std::string toneMapper;  // override: clamp | reinhard | aces
+    std::string pluginDir;           // empty: none
+    std::string shading;             // override: cook-torrance | blinn-phong
+    std::string toneMapper;          // override: clamp | reinhard | aces
+    std::string debugView = "none";  // none | normals | depth | albedo
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt);
