@@ -51,6 +51,7 @@ private:
 struct GlslangReflection {
     std::map<std::string, int> offsets;     // "Block.member" -> byte offset
     std::map<std::string, int> blockSizes;  // block name -> declared size
+    std::map<std::string, int> topStrides;  // block member -> stride of its top-level array
     std::string error;
 };
 
@@ -82,10 +83,12 @@ GlslangReflection reflectWithGlslang(const std::string& path) {
     for (int i = 0; i < program.getNumUniformVariables(); ++i) {
         const glslang::TObjectReflection& u = program.getUniform(i);
         out.offsets[u.name] = u.offset;
+        out.topStrides[u.name] = u.topLevelArrayStride;
     }
     for (int i = 0; i < program.getNumBufferVariables(); ++i) {
         const glslang::TObjectReflection& b = program.getBufferVariable(i);
         out.offsets[b.name] = b.offset;
+        out.topStrides[b.name] = b.topLevelArrayStride;
     }
     for (int i = 0; i < program.getNumUniformBlocks(); ++i) {
         out.blockSizes[program.getUniformBlock(i).name] = program.getUniformBlock(i).size;
@@ -163,6 +166,20 @@ TEST(ShadercLayout, EveryMemberOffsetEqualsGlslangReflection) {
         << listed(r.blockSizes);
 }
 
+// Criterion: a struct used as the element of a runtime-sized array has the array's stride as its
+// C++ size (so a std::vector of it uploads as is), per glslang's reflection (members of a block
+// without an instance name are reflected without the block name).
+TEST(ShadercLayout, RuntimeArrayElementSizeEqualsTheStride) {
+    const GlslangReflection r = reflectWithGlslang(std::string(SHADERC_PROGRAMS) + "/params.comp");
+    ASSERT_EQ(r.error, "");
+    ASSERT_TRUE(r.topStrides.count("probes[0].position")) << listed(r.topStrides);
+    ASSERT_TRUE(r.topStrides.count("items[0].direction")) << listed(r.topStrides);
+    EXPECT_EQ(static_cast<int>(sizeof(params::Probe)), r.topStrides.at("probes[0].position"));
+    EXPECT_EQ(static_cast<int>(sizeof(params::Inner)), r.topStrides.at("items[0].direction"));
+    EXPECT_EQ(sizeof(params::Probe), 32u);  // declared 24 bytes; std430 aligns the vec3 to 16
+    EXPECT_EQ(static_cast<int>(offsetof(params::Probe, uv)), r.offsets.at("probes[0].uv"));
+}
+
 // Criterion: the std140 / std430 rules, worked out by hand, hold for the generated structs.
 TEST(ShadercLayout, KnownStd140AndStd430Answers) {
     EXPECT_EQ(offsetof(params::Params, axis), 16u);       // vec3 aligns to 16
@@ -207,7 +224,8 @@ TEST(ShadercLayout, PushConstantsAndSharedView) {
 TEST(ShadercLayout, NamedSlotsMatchReflection) {
     const rhi::ShaderDesc& desc = params::compute();
     for (const penumbra::shaders::SlotRef& slot :
-         {params::slot::View, params::slot::Params, params::slot::Stats, params::slot::Items}) {
+         {params::slot::View, params::slot::Params, params::slot::Stats, params::slot::Items,
+          params::slot::Probes}) {
         SCOPED_TRACE(slot.name);
         const rhi::ShaderBinding* byName = penumbra::shaders::findBinding(desc, slot.name);
         ASSERT_NE(byName, nullptr);

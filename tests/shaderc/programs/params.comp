@@ -41,6 +41,17 @@ layout(set = 1, binding = 2, std430) readonly buffer Items {
     Inner items[];
 };
 
+// Used only as the element of a runtime-sized array: its C++ size is still the array stride.
+struct Probe {
+    vec3 position;
+    float radius;
+    vec2 uv;
+};
+
+layout(set = 1, binding = 3, std430) readonly buffer Probes {
+    Probe probes[];
+};
+
 layout(push_constant) uniform Push {
     vec4 tint;
     uint frame;
@@ -50,7 +61,7 @@ void main() {
     float v = params.scale + params.axis.x + params.extent.y + float(params.count + int(params.mask)) +
               float(params.cell.x) + float(params.dims.z) + (params.enabled ? 1.0 : 0.0) +
               params.transform[3].x + params.rotation[2].y + params.basis[1].x + params.colors[2].w +
-              params.inners[1].weight + params.single.uv.x + params.tail + items[0].weight;
+              params.inners[1].weight + params.single.uv.x + params.tail + items[0].weight + probes[1].uv.y;
     stats.range = vec2(v, pc.tint.x) + view.viewport.zw;
     stats.samples[pc.frame % 4u] = v;
     stats.last = params.inners[0];

@@ -240,8 +240,16 @@ public:
                     runtimeArray = true;
                     if (memberType.basetype == spirv_cross::SPIRType::Struct) {
                         std::string element;
-                        if (!reflect(m_compiler.get_type(memberType.self), BlockKind::Struct, 0, 0, element))
+                        if (!reflect(m_compiler.get_type(memberType.self), BlockKind::Struct, 0, 0,
+                                     element)) {
                             ok = false;
+                            continue;
+                        }
+                        // The element struct's C++ size must be the array stride (std::vector<T> uploads).
+                        for (StructLayout& l : m_stage.layouts) {
+                            if (l.name == element)
+                                l.runtimeArrayStride = m_compiler.type_struct_member_array_stride(type, i);
+                        }
                     }
                     continue;
                 }
@@ -513,6 +521,18 @@ bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
 
     // 3. Struct sizes: an array of structs pads its element struct to the array stride.
     std::map<std::string, uint32_t> strides;
+    for (const StageOutput* stage : stages) {
+        for (const StructLayout& layout : stage->layouts) {
+            if (layout.runtimeArrayStride == 0) continue;
+            auto [it, inserted] = strides.emplace(layout.name, layout.runtimeArrayStride);
+            if (!inserted && it->second != layout.runtimeArrayStride) {
+                error(layout.origin, "arrays of struct '" + layout.name + "' have strides of " +
+                                         std::to_string(it->second) + " and " +
+                                         std::to_string(layout.runtimeArrayStride) +
+                                         " bytes: one C++ struct cannot have both sizes");
+            }
+        }
+    }
     for (const std::string& name : firstSeen) {
         for (const StructMember& m : pool.at(name).members) {
             if (!m.isStruct || m.arraySize == 0) continue;

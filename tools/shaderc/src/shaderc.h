@@ -59,6 +59,7 @@ struct StructLayout {
     std::vector<StructMember> members;  // in offset order
     uint32_t declaredSize = 0;          // SPIR-V declared size
     uint32_t size = 0;                  // sizeof of the C++ struct (declared size + tail padding)
+    uint32_t runtimeArrayStride = 0;    // stride of a runtime-sized array of this struct (0: none)
     std::string origin;                 // "path:line" (or "path") where the GLSL type is declared
 };
 
