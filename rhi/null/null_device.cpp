@@ -12,6 +12,7 @@
 #include "rhi/common/backend_factories.h"
 #include "rhi/common/deferred_release.h"
 #include "rhi/common/handle_pool.h"
+#include "rhi/common/resource_kinds.h"
 #include "rhi/common/subresource_states.h"
 #include "rhi/validation/resource_util.h"
 #include "rhi/validation/validation_device.h"
@@ -107,36 +108,9 @@ class NullCommandList final : public CommandList {
 public:
     NullCommandList(NullDevice& device, std::string name) : m_device(device), m_name(std::move(name)) {}
 
-    void barrier(std::span<const Barrier> barriers) override;
-    void updateBuffer(BufferHandle dst, uint64_t offset, const void* data, uint64_t size) override;
-    void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
-                    uint64_t size) override;
-    void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
-    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
-                     const TextureRegion& dstRegion) override;
-    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
-                             const TextureRegion& dstRegion) override;
-    void bindPipeline(PipelineHandle pipeline) override;
-    void bindGroup(uint32_t set, BindGroupHandle group) override;
-    void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
-    void dispatch(uint32_t x, uint32_t y, uint32_t z) override;
-    void dispatchIndirect(BufferHandle args, uint64_t offset) override;
-    void beginRenderPass(const RenderPassDesc& desc) override;
-    void endRenderPass() override;
-    void setViewport(const Viewport& vp) override;
-    void setScissor(const Rect& rect) override;
-    void bindVertexBuffer(uint32_t slot, BufferHandle buffer, uint64_t offset) override;
-    void bindIndexBuffer(BufferHandle buffer, IndexType type, uint64_t offset) override;
-    void draw(uint32_t vertexCount, uint32_t instanceCount, uint32_t firstVertex,
-              uint32_t firstInstance) override;
-    void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
-                     uint32_t firstInstance) override;
-    void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
-    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
-    void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
-    void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
-    void pushDebugGroup(std::string_view name) override;
-    void popDebugGroup() override;
+#define RHI_COMMAND_LIST_METHOD(ret, name, params, qualifiers) ret name params qualifiers override;
+#include "rhi/command_list_api.inc"
+#undef RHI_COMMAND_LIST_METHOD
 
     std::vector<Command>& commands() { return m_commands; }
 
@@ -358,21 +332,15 @@ public:
     }
 
     // --- destruction -----------------------------------------------------------------------------
-    void destroy(BufferHandle h) override { destroyIn(m_buffers, h, "buffer"); }
-    void destroy(TextureHandle h) override { destroyIn(m_textures, h, "texture"); }
-    void destroy(SamplerHandle h) override { destroyIn(m_samplers, h, "sampler"); }
-    void destroy(ShaderHandle h) override { destroyIn(m_shaders, h, "shader"); }
-    void destroy(PipelineHandle h) override { destroyIn(m_pipelines, h, "pipeline"); }
-    void destroy(BindGroupHandle h) override { destroyIn(m_bindGroups, h, "bind group"); }
-    void destroy(QueryPoolHandle h) override { destroyIn(m_queryPools, h, "query pool"); }
+#define RHI_DESTROY(Handle, pool, name) \
+    void destroy(Handle h) override { destroyIn(pool, h, name); }
+    RHI_RESOURCE_KINDS(RHI_DESTROY)
+#undef RHI_DESTROY
 
-    bool isAlive(BufferHandle h) const override { return m_buffers.contains(h); }
-    bool isAlive(TextureHandle h) const override { return m_textures.contains(h); }
-    bool isAlive(SamplerHandle h) const override { return m_samplers.contains(h); }
-    bool isAlive(ShaderHandle h) const override { return m_shaders.contains(h); }
-    bool isAlive(PipelineHandle h) const override { return m_pipelines.contains(h); }
-    bool isAlive(BindGroupHandle h) const override { return m_bindGroups.contains(h); }
-    bool isAlive(QueryPoolHandle h) const override { return m_queryPools.contains(h); }
+#define RHI_IS_ALIVE(Handle, pool, name) \
+    bool isAlive(Handle h) const override { return pool.contains(h); }
+    RHI_RESOURCE_KINDS(RHI_IS_ALIVE)
+#undef RHI_IS_ALIVE
 
     const BufferDesc* describe(BufferHandle h) const override {
         const auto* b = m_buffers.get(h);

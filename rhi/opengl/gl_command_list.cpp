@@ -40,8 +40,9 @@ GLbitfield barrierBits(Access after, bool isTexture) {
     return bits;
 }
 
-constexpr Access kBarrierWrites =
-    Access::ShaderWrite | Access::ColorTarget | Access::DepthTargetWrite | Access::CopyDst;
+// GPU writes that need a glMemoryBarrier before later reads: every write access except host writes,
+// which go through coherent persistent mappings.
+constexpr Access kBarrierWrites = kWriteAccesses & ~Access::HostWrite;
 
 }  // namespace
 

@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "rhi/common/backend_factories.h"
+#include "rhi/common/resource_kinds.h"
 #include "rhi/common/subresource_states.h"
 
 namespace rhi::gl {
@@ -1375,10 +1376,23 @@ void GlDevice::resizeBackbuffer(uint32_t width, uint32_t height) {
     destroy(old);
 }
 
+// Inline-sized overrides (declared from rhi/device_api.inc).
+const DeviceInfo& GlDevice::info() const { return m_info; }
+#define RHI_IS_ALIVE(Handle, pool, name) \
+    bool GlDevice::isAlive(Handle h) const { return pool.contains(h); }
+RHI_RESOURCE_KINDS(RHI_IS_ALIVE)
+#undef RHI_IS_ALIVE
+DeviceStats GlDevice::stats() const { return m_stats; }
+FormatSupport GlDevice::formatSupport(Format format) const {
+    return format < Format::Count ? m_formatSupport[size_t(format)] : FormatSupport::None;
+}
+Format GlDevice::backbufferFormat() const { return kBackbufferFormat; }
+
+}  // namespace rhi::gl
+
 // ---------------------------------------------------------------------------------------------
 // Factory
 // ---------------------------------------------------------------------------------------------
-}  // namespace rhi::gl
 
 namespace rhi::detail {
 

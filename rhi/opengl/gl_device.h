@@ -139,36 +139,9 @@ class GlCommandList final : public CommandList {
 public:
     explicit GlCommandList(GlDevice& device) : m_device(device) {}
 
-    void barrier(std::span<const Barrier> barriers) override;
-    void updateBuffer(BufferHandle dst, uint64_t offset, const void* data, uint64_t size) override;
-    void copyBuffer(BufferHandle src, uint64_t srcOffset, BufferHandle dst, uint64_t dstOffset,
-                    uint64_t size) override;
-    void fillBuffer(BufferHandle dst, uint64_t offset, uint64_t size, uint32_t value) override;
-    void copyTexture(TextureHandle src, const TextureRegion& srcRegion, TextureHandle dst,
-                     const TextureRegion& dstRegion) override;
-    void copyBufferToTexture(BufferHandle src, uint64_t srcOffset, TextureHandle dst,
-                             const TextureRegion& dstRegion) override;
-    void bindPipeline(PipelineHandle pipeline) override;
-    void bindGroup(uint32_t set, BindGroupHandle group) override;
-    void pushConstants(const void* data, uint32_t size, uint32_t offset) override;
-    void dispatch(uint32_t groupsX, uint32_t groupsY, uint32_t groupsZ) override;
-    void dispatchIndirect(BufferHandle args, uint64_t offset) override;
-    void beginRenderPass(const RenderPassDesc& desc) override;
-    void endRenderPass() override;
-    void setViewport(const Viewport& vp) override;
-    void setScissor(const Rect& rect) override;
-    void bindVertexBuffer(uint32_t slot, BufferHandle buffer, uint64_t offset) override;
-    void bindIndexBuffer(BufferHandle buffer, IndexType type, uint64_t offset) override;
-    void draw(uint32_t vertexCount, uint32_t instanceCount, uint32_t firstVertex,
-              uint32_t firstInstance) override;
-    void drawIndexed(uint32_t indexCount, uint32_t instanceCount, uint32_t firstIndex, int32_t vertexOffset,
-                     uint32_t firstInstance) override;
-    void drawIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
-    void drawIndexedIndirect(BufferHandle args, uint64_t offset, uint32_t drawCount) override;
-    void resetQueries(QueryPoolHandle pool, uint32_t first, uint32_t count) override;
-    void writeTimestamp(QueryPoolHandle pool, uint32_t index) override;
-    void pushDebugGroup(std::string_view name) override;
-    void popDebugGroup() override;
+#define RHI_COMMAND_LIST_METHOD(ret, name, params, qualifiers) ret name params qualifiers override;
+#include "rhi/command_list_api.inc"
+#undef RHI_COMMAND_LIST_METHOD
 
 private:
     friend class GlDevice;
@@ -199,62 +172,9 @@ public:
     // Loads entry points, checks the version and sets up global state. False: already logged.
     bool initialize();
 
-    const DeviceInfo& info() const override { return m_info; }
-
-    BufferHandle createBuffer(const BufferDesc& desc, const void* initialData) override;
-    TextureHandle createTexture(const TextureDesc& desc) override;
-    SamplerHandle createSampler(const SamplerDesc& desc) override;
-    ShaderHandle createShader(const ShaderDesc& desc) override;
-    PipelineHandle createComputePipeline(const ComputePipelineDesc& desc) override;
-    PipelineHandle createGraphicsPipeline(const GraphicsPipelineDesc& desc) override;
-    BindGroupHandle createBindGroup(const BindGroupDesc& desc) override;
-    QueryPoolHandle createQueryPool(const QueryPoolDesc& desc) override;
-
-    void destroy(BufferHandle h) override;
-    void destroy(TextureHandle h) override;
-    void destroy(SamplerHandle h) override;
-    void destroy(ShaderHandle h) override;
-    void destroy(PipelineHandle h) override;
-    void destroy(BindGroupHandle h) override;
-    void destroy(QueryPoolHandle h) override;
-
-    bool isAlive(BufferHandle h) const override { return m_buffers.contains(h); }
-    bool isAlive(TextureHandle h) const override { return m_textures.contains(h); }
-    bool isAlive(SamplerHandle h) const override { return m_samplers.contains(h); }
-    bool isAlive(ShaderHandle h) const override { return m_shaders.contains(h); }
-    bool isAlive(PipelineHandle h) const override { return m_pipelines.contains(h); }
-    bool isAlive(BindGroupHandle h) const override { return m_bindGroups.contains(h); }
-    bool isAlive(QueryPoolHandle h) const override { return m_queryPools.contains(h); }
-
-    const BufferDesc* describe(BufferHandle h) const override;
-    const TextureDesc* describe(TextureHandle h) const override;
-
-    void writeBuffer(BufferHandle dst, uint64_t offset, const void* data, uint64_t size) override;
-    void writeTexture(TextureHandle dst, TextureSubresource sub, const void* data, uint64_t size) override;
-    void writeTextureRegion(TextureHandle dst, const TextureRegion& region, const void* data,
-                            uint64_t size) override;
-    void* mappedPointer(BufferHandle h) override;
-
-    CommandList& beginCommandList(std::string_view debugName) override;
-    uint64_t submit(CommandList& list) override;
-    void waitForSubmission(uint64_t serial) override;
-    void waitIdle() override;
-    void collectGarbage() override;
-
-    bool readBuffer(BufferHandle src, uint64_t offset, uint64_t size, void* out) override;
-    bool readTexture(TextureHandle src, TextureSubresource sub, Access currentAccess,
-                     std::vector<uint8_t>& out) override;
-    bool readTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
-    bool tryReadTimestamps(QueryPoolHandle pool, uint32_t first, uint32_t count, uint64_t* outNs) override;
-    DeviceStats stats() const override { return m_stats; }
-    FormatSupport formatSupport(Format format) const override {
-        return format < Format::Count ? m_formatSupport[size_t(format)] : FormatSupport::None;
-    }
-
-    TextureHandle acquireBackbuffer() override;
-    Format backbufferFormat() const override { return kBackbufferFormat; }
-    bool present() override;
-    void resizeBackbuffer(uint32_t width, uint32_t height) override;
+#define RHI_DEVICE_METHOD(ret, name, params, qualifiers) ret name params qualifiers override;
+#include "rhi/device_api.inc"
+#undef RHI_DEVICE_METHOD
 
 private:
     friend class GlCommandList;

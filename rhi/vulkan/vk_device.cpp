@@ -5,6 +5,7 @@
 #include <cstring>
 
 #include "rhi/common/backend_factories.h"
+#include "rhi/common/resource_kinds.h"
 #include "rhi/validation/validation_device.h"
 #include "rhi/vulkan/vk_common.h"
 
@@ -880,6 +881,17 @@ void VulkanDevice::flushUploadsAndWait() {
     if (!m_uploadCmd) return;
     uint64_t serial = submitBatch({}, {}, VK_NULL_HANDLE);
     waitSerial(serial);
+}
+
+// Inline-sized overrides (declared from rhi/device_api.inc).
+const DeviceInfo& VulkanDevice::info() const { return m_info; }
+#define RHI_IS_ALIVE(Handle, pool, name) \
+    bool VulkanDevice::isAlive(Handle h) const { return pool.contains(h); }
+RHI_RESOURCE_KINDS(RHI_IS_ALIVE)
+#undef RHI_IS_ALIVE
+DeviceStats VulkanDevice::stats() const { return m_stats; }
+FormatSupport VulkanDevice::formatSupport(Format format) const {
+    return format < Format::Count ? m_formatSupport[size_t(format)] : FormatSupport::None;
 }
 
 }  // namespace vk
