@@ -562,7 +562,8 @@ TextureRef FrameGraph::importTexture(std::string name, rhi::TextureHandle textur
     return r == kInvalidIndex ? TextureRef{} : TextureRef{r, m_epoch};
 }
 
-TextureRef FrameGraph::importPersistent(std::string name, rhi::TextureHandle texture, rhi::Access finalState) {
+TextureRef FrameGraph::importPersistent(std::string name, rhi::TextureHandle texture,
+                                        rhi::Access finalState) {
     auto it = m_persistent.find(texture.value);
     const rhi::Access current = it == m_persistent.end() ? Access::None : it->second;
     TextureRef ref = importTexture(std::move(name), texture, current, finalState);
@@ -792,71 +793,72 @@ bool FrameGraph::allocate() {
     }
     m_info.transientCount = uint32_t(transients.size());
 
-    // Physical resources from the pool: same shape, usage a superset (an exact match first).
-    for (size_t si = firstTransientSlot; si < m_slots.size(); ++si) {
-        Slot& s = m_slots[si];
-        std::string debugName = "fg";
-        for (uint32_t ri : s.resources)
-            debugName += (debugName.size() == 2 ? ":" : "+") + m_resources[ri].name;
-        if (s.type == ResourceType::Texture) {
-            PooledTexture* best = nullptr;
-            for (PooledTexture& t : m_texturePool) {
-                if (t.inUse || !sameShape(t.desc, s.textureDesc) || any(s.textureUsage & ~t.desc.usage))
-                    continue;
-                if (!best || (t.desc.usage == s.textureUsage && best->desc.usage != s.textureUsage))
-                    best = &t;
-            }
-            if (!best) {
-                rhi::TextureDesc desc = s.textureDesc;
-                desc.usage = s.textureUsage;
-                desc.debugName = debugName;
-                rhi::TextureHandle h = m_device.createTexture(desc);
-                if (!h) {
-                    error("could not create the physical texture for '" + debugName.substr(3) + "'");
-                    return false;
-                }
-                m_texturePool.push_back(PooledTexture{h, desc, m_frame, false});
-                best = &m_texturePool.back();
-                ++m_info.texturesCreated;
-            }
-            best->inUse = true;
-            best->lastUsedFrame = m_frame;
-            s.texture = best->handle;
-            s.textureUsage = best->desc.usage;
-            ++m_info.physicalTextureCount;
-            m_info.transientMemoryBytes += rhi::textureBytes(best->desc);
-            for (uint32_t ri : s.resources) m_resources[ri].textureDesc.usage = s.textureUsage;
-        } else {
-            PooledBuffer* best = nullptr;
-            for (PooledBuffer& b : m_bufferPool) {
-                if (b.inUse || !sameShape(b.desc, s.bufferDesc) || any(s.bufferUsage & ~b.desc.usage))
-                    continue;
-                if (!best || (b.desc.usage == s.bufferUsage && best->desc.usage != s.bufferUsage)) best = &b;
-            }
-            if (!best) {
-                rhi::BufferDesc desc = s.bufferDesc;
-                desc.usage = s.bufferUsage;
-                desc.debugName = debugName;
-                rhi::BufferHandle h = m_device.createBuffer(desc);
-                if (!h) {
-                    error("could not create the physical buffer for '" + debugName.substr(3) + "'");
-                    return false;
-                }
-                m_bufferPool.push_back(PooledBuffer{h, desc, m_frame, false});
-                best = &m_bufferPool.back();
-                ++m_info.buffersCreated;
-            }
-            best->inUse = true;
-            best->lastUsedFrame = m_frame;
-            s.buffer = best->handle;
-            s.bufferUsage = best->desc.usage;
-            ++m_info.physicalBufferCount;
-            m_info.transientMemoryBytes += best->desc.size;
-            for (uint32_t ri : s.resources) m_resources[ri].bufferDesc.usage = s.bufferUsage;
-        }
-    }
+    // Physical resources from the pool.
+    for (size_t si = firstTransientSlot; si < m_slots.size(); ++si)
+        if (!acquirePhysical(m_slots[si])) return false;
     m_info.physicalResourceCount = m_info.physicalTextureCount + m_info.physicalBufferCount;
     releaseUnusedPoolEntries(false);
+    return true;
+}
+
+// A physical resource from the pool for a transient slot: same shape, usage a superset (an exact
+// match first), or a new one.
+bool FrameGraph::acquirePhysical(Slot& s) {
+    std::string debugName = "fg";
+    for (uint32_t ri : s.resources) debugName += (debugName.size() == 2 ? ":" : "+") + m_resources[ri].name;
+    if (s.type == ResourceType::Texture) {
+        PooledTexture* best = nullptr;
+        for (PooledTexture& t : m_texturePool) {
+            if (t.inUse || !sameShape(t.desc, s.textureDesc) || any(s.textureUsage & ~t.desc.usage)) continue;
+            if (!best || (t.desc.usage == s.textureUsage && best->desc.usage != s.textureUsage)) best = &t;
+        }
+        if (!best) {
+            rhi::TextureDesc desc = s.textureDesc;
+            desc.usage = s.textureUsage;
+            desc.debugName = debugName;
+            rhi::TextureHandle h = m_device.createTexture(desc);
+            if (!h) {
+                error("could not create the physical texture for '" + debugName.substr(3) + "'");
+                return false;
+            }
+            m_texturePool.push_back(PooledTexture{h, desc, m_frame, false});
+            best = &m_texturePool.back();
+            ++m_info.texturesCreated;
+        }
+        best->inUse = true;
+        best->lastUsedFrame = m_frame;
+        s.texture = best->handle;
+        s.textureUsage = best->desc.usage;
+        ++m_info.physicalTextureCount;
+        m_info.transientMemoryBytes += rhi::textureBytes(best->desc);
+        for (uint32_t ri : s.resources) m_resources[ri].textureDesc.usage = s.textureUsage;
+    } else {
+        PooledBuffer* best = nullptr;
+        for (PooledBuffer& b : m_bufferPool) {
+            if (b.inUse || !sameShape(b.desc, s.bufferDesc) || any(s.bufferUsage & ~b.desc.usage)) continue;
+            if (!best || (b.desc.usage == s.bufferUsage && best->desc.usage != s.bufferUsage)) best = &b;
+        }
+        if (!best) {
+            rhi::BufferDesc desc = s.bufferDesc;
+            desc.usage = s.bufferUsage;
+            desc.debugName = debugName;
+            rhi::BufferHandle h = m_device.createBuffer(desc);
+            if (!h) {
+                error("could not create the physical buffer for '" + debugName.substr(3) + "'");
+                return false;
+            }
+            m_bufferPool.push_back(PooledBuffer{h, desc, m_frame, false});
+            best = &m_bufferPool.back();
+            ++m_info.buffersCreated;
+        }
+        best->inUse = true;
+        best->lastUsedFrame = m_frame;
+        s.buffer = best->handle;
+        s.bufferUsage = best->desc.usage;
+        ++m_info.physicalBufferCount;
+        m_info.transientMemoryBytes += best->desc.size;
+        for (uint32_t ri : s.resources) m_resources[ri].bufferDesc.usage = s.bufferUsage;
+    }
     return true;
 }
 

@@ -481,6 +481,7 @@ private:
 
     void cull();
     bool allocate();
+    bool acquirePhysical(Slot& s);
     void placeBarriers();
     void releaseUnusedPoolEntries(bool all);
 
