@@ -2,8 +2,7 @@
 
 #include <shaders/debug_view.h>
 
-#include "renderer/core/shader_params.h"
-#include "renderer/features/lighting.h"
+#include "renderer/features/fullscreen.h"
 
 namespace penumbra::render {
 
@@ -29,19 +28,11 @@ void addDebugView(FrameContext& fc, DebugView view, float depthRange) {
         GBuffer gb;
         fg::TextureRef output;
     };
-    // 1. Choose the shader variant and get the cached pipeline and sampler.
+    // 1. Choose the shader variant; the program's pipeline and sampler come from the cache.
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
-    const bool albedo = gbuffer.albedo.isValid();
-    const auto variant = albedo ? program::Variant::Albedo : program::Variant::Default;
-    const rhi::ShaderDesc& vs = program::vertex(variant);
-    const rhi::ShaderDesc& fs = program::fragment(variant);
-    rhi::GraphicsPipelineDesc pd;
-    pd.colorFormats = {fc.board.find<Output>()->srgbTarget ? rhi::Format::RGBA8_SRGB
-                                                           : rhi::Format::RGBA8_UNORM};
-    const rhi::PipelineHandle pipeline = fc.cache.graphicsPipeline(vs, fs, pd);
-    rhi::SamplerDesc nearest;
-    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    const rhi::SamplerHandle sampler = fc.cache.sampler(nearest);
+    const auto variant = gbuffer.albedo.isValid() ? program::Variant::Albedo : program::Variant::Default;
+    const FullscreenProgram prog =
+        fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     // 2. The push-constant block, through the struct shaderc generated from the shader.
     const program::PushConstants push{glm::uvec4(uint32_t(view) - 1, 0, 0, 0),
                                       glm::vec4(depthRange, 0, 0, 0)};
@@ -55,22 +46,18 @@ void addDebugView(FrameContext& fc, DebugView view, float depthRange) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.materials, rhi::Access::ShaderRead);
-            for (fg::TextureRef t : {d.gb.depth, d.gb.normal, d.gb.material, d.gb.albedo})
-                if (t.isValid()) b.read(t, rhi::Access::ShaderSampled);
+            readGBuffer(b, d.gb);
         },
         // 4. Record: bind parameters by name, push constants, draw the full-screen triangle.
-        [&cache = fc.cache, &vs, &fs, pipeline, sampler, albedo, push](const Data& d, fg::PassContext& ctx) {
-            beginFullscreen(ctx, d.output, pipeline, "debug_view");
-            ShaderParams params(vs, fs);
+        [&cache = fc.cache, prog, push](const Data& d, fg::PassContext& ctx) {
+            beginFullscreen(ctx, d.output, prog.pipeline, "debug_view");
+            ShaderParams params(*prog.vertex, *prog.fragment);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("Scene", ctx.buffer(d.scene.scene))
-                .set("Materials", ctx.buffer(d.scene.materials))
-                .set("gbufferDepth", ctx.texture(d.gb.depth), sampler)
-                .set("gbufferNormal", ctx.texture(d.gb.normal), sampler)
-                .set("gbufferMaterial", ctx.texture(d.gb.material), sampler);
-            if (albedo) params.set("gbufferAlbedo", ctx.texture(d.gb.albedo), sampler);
+                .set("Materials", ctx.buffer(d.scene.materials));
+            setGBuffer(params, ctx, d.gb, prog.nearest);
             ctx.cmd.pushConstants(&push, sizeof(push));
-            drawFullscreen(ctx, params, cache, pipeline);
+            drawFullscreen(ctx, params, cache, prog.pipeline);
         });
 }
 

@@ -8,7 +8,6 @@
 
 #include <array>
 
-#include "renderer/core/shader_params.h"
 #include "renderer/features/frame_context.h"
 
 namespace penumbra::render {
@@ -17,14 +16,5 @@ namespace penumbra::render {
 void addLighting(FrameContext& fc);
 // Clears Output to `encoded` (already tone mapped and display encoded).
 void addBackground(FrameContext& fc, std::array<float, 4> encoded);
-
-// Colour attachment + viewport + scissor over `target`, the pipeline bound: the start of every
-// full-screen raster pass (lighting, debug views). End with endFullscreen().
-void beginFullscreen(fg::PassContext& ctx, fg::TextureRef target, rhi::PipelineHandle pipeline,
-                     const char* name);
-// Binds `params`, draws the full-screen triangle (renderer/shaders/fullscreen.glsl) and ends the
-// render pass (a failed bind draws nothing: the error is logged).
-void drawFullscreen(fg::PassContext& ctx, ShaderParams& params, GpuCache& cache,
-                    rhi::PipelineHandle pipeline);
 
 }  // namespace penumbra::render

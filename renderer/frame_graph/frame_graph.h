@@ -126,36 +126,41 @@ struct BufferRef {
     friend constexpr bool operator==(const BufferRef&, const BufferRef&) = default;
 };
 
-inline constexpr uint32_t kAllMips = 0xffffffffu;
-inline constexpr uint32_t kAllLayers = 0xffffffffu;
+inline constexpr uint32_t kAllMips = rhi::kRemaining;
+inline constexpr uint32_t kAllLayers = rhi::kRemaining;
 
-// The part of a texture a pass reads or writes: a range of mip levels, a range of array layers
-// (Tex2DArray) and, for Tex3D textures, a box inside each of those mips (`extent` 0 on an axis:
-// to the end of the mip). The default is the whole texture. Barriers and state are tracked per
-// mip level and array layer; a box narrows what the pass declares (it is checked against the
-// texture's size and shown in the Graphviz dump) but a barrier always covers the whole mip, as
-// GPU image barriers do.
-struct Subresource {
-    uint32_t baseMip = 0;
-    uint32_t mipCount = kAllMips;
-    uint32_t baseLayer = 0;
-    uint32_t layerCount = kAllLayers;
+// The part of a texture a pass reads or writes: a range of mip levels and array layers (Tex2DArray)
+// as in rhi::TextureRange and, for Tex3D textures, a box inside each of those mips (`extent` 0 on
+// an axis: to the end of the mip). The default is the whole texture. Barriers and state are
+// tracked per mip level and array layer; a box narrows what the pass declares (it is checked
+// against the texture's size and shown in the Graphviz dump) but a barrier always covers the whole
+// mip, as GPU image barriers do.
+struct Subresource : rhi::TextureRange {
     std::array<uint32_t, 3> offset{0, 0, 0};  // Tex3D box origin (texels of each mip)
     std::array<uint32_t, 3> extent{0, 0, 0};  // Tex3D box size; 0 = to the end of the mip
 
     static Subresource whole() { return {}; }
     static Subresource mips(uint32_t base, uint32_t count = 1) {
-        return {base, count, 0, kAllLayers, {}, {}};
+        Subresource s;
+        s.baseMip = base;
+        s.mipCount = count;
+        return s;
     }
     static Subresource layers(uint32_t base, uint32_t count = 1) {
-        return {0, kAllMips, base, count, {}, {}};
+        Subresource s;
+        s.baseLayer = base;
+        s.layerCount = count;
+        return s;
     }
     static Subresource region(uint32_t mip, std::array<uint32_t, 3> origin, std::array<uint32_t, 3> size) {
-        return {mip, 1, 0, kAllLayers, origin, size};
+        Subresource s = mips(mip);
+        s.offset = origin;
+        s.extent = size;
+        return s;
     }
     bool isWhole() const {
-        return baseMip == 0 && mipCount == kAllMips && baseLayer == 0 && layerCount == kAllLayers &&
-               offset == std::array<uint32_t, 3>{0, 0, 0} && extent == std::array<uint32_t, 3>{0, 0, 0};
+        return TextureRange::isWhole() && offset == std::array<uint32_t, 3>{0, 0, 0} &&
+               extent == std::array<uint32_t, 3>{0, 0, 0};
     }
 };
 
