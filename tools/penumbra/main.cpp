@@ -1,7 +1,7 @@
 // penumbra — command-line front end.
 //   penumbra info [--backend vulkan|gl]      device, driver and limits
 //   penumbra render <scene> -o out.png [...] a scene through the embedding API (cmd_render.cpp)
-//   penumbra demo -o out.png [--backend] [--width --height]   the RHI demo frame + timing table
+//   penumbra demo -o out.png [--backend] [--width --height]   the built-in demo scene + timing table
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
 // Global flags (-v, --version, --help) are accepted before or after the subcommand. Every command
@@ -21,8 +21,9 @@
 #include "cmd_sdf.h"
 #include "engine/core/log.h"
 #include "engine/core/output_file.h"
+#include "engine/engine.h"
 #include "engine/image/image.h"
-#include "renderer/demo/rhi_demo.h"
+#include "engine/scene/demo_scene.h"
 #include "renderer/renderer.h"
 #include "rhi/device.h"
 
@@ -107,8 +108,11 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
             const std::string& graphvizPath) {
     // Everything that can be checked is checked before the frame is rendered.
     std::string err;
-    rhi::Backend backend;
-    if (!penumbra::cli::chooseBackend(opt.backend, "demo", backend, err)) {
+    penumbra::RendererDesc rendererDesc;
+    rendererDesc.validation = opt.validation;
+    rendererDesc.width = width;
+    rendererDesc.height = height;
+    if (!penumbra::cli::chooseBackend(opt.backend, "demo", rendererDesc.backend, err)) {
         penumbra::log::error("{}", err);
         return 2;
     }
@@ -118,34 +122,44 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
     }
     penumbra::OutputFiles outputs;
     if (!penumbra::cli::prepareOutputs(outputs, {output, graphvizPath}, "demo")) return 1;
-    auto device = openDevice(opt, backend);
-    if (!device) return 1;
-    if (!penumbra::cli::refuseNullDevice(*device, "demo", err) ||
-        !penumbra::cli::checkImageSize(width, height, *device, "demo: --width/--height", err)) {
-        penumbra::log::error("{}", err);
-        return 2;
-    }
-    const rhi::DeviceInfo& info = device->info();
-    fmt::print("penumbra demo: {} on {} ({}), {}x{}\n", rhi::toString(info.backend), info.deviceName,
-               info.platform, width, height);
-    penumbra::demo::DemoSettings settings;
-    settings.width = width;
-    settings.height = height;
-    penumbra::demo::DemoResult r = penumbra::demo::renderDemoFrame(*device, settings);
-    if (!r.ok) {
-        penumbra::log::error("demo frame failed: {}", r.error);
-        return 1;
-    }
-    if (!penumbra::cli::writePngOutput(outputs, output, r.image, err) ||
-        (!graphvizPath.empty() && !outputs.writeText(graphvizPath, r.graphviz, err))) {
+    // The built-in demo scene (engine/scene/demo_scene.h) through the scene renderer: the same
+    // frame path as `penumbra render`.
+    std::unique_ptr<penumbra::Engine> engine = penumbra::Engine::create({}, err);
+    if (!engine || !penumbra::scene::buildDemoScene(engine->assets(), engine->scene(), err)) {
         penumbra::log::error("demo: {}", err);
         return 1;
     }
-    printTimings(r.timings);
+    std::unique_ptr<penumbra::Renderer> renderer = penumbra::Renderer::create(*engine, rendererDesc, err);
+    if (!renderer) {
+        penumbra::log::error("{}", err);
+        return 1;
+    }
+    if (!penumbra::cli::refuseNullDevice(renderer->device(), "demo", err) ||
+        !penumbra::cli::checkImageSize(width, height, renderer->device(), "demo: --width/--height", err)) {
+        penumbra::log::error("{}", err);
+        return 2;
+    }
+    const rhi::DeviceInfo& info = renderer->device().info();
+    fmt::print("penumbra demo: {} on {} ({}), {}x{}\n", rhi::toString(info.backend), info.deviceName,
+               info.platform, width, height);
+    penumbra::ImageRGBA8 image;
+    if (!renderer->renderFrame(*engine, err) || !renderer->readPixels(image, err)) {
+        penumbra::log::error("demo frame failed: {}", err);
+        return 1;
+    }
+    if (!penumbra::cli::writePngOutput(outputs, output, image, err) ||
+        (!graphvizPath.empty() && !outputs.writeText(graphvizPath, renderer->frameGraphviz(), err))) {
+        penumbra::log::error("demo: {}", err);
+        return 1;
+    }
+    const penumbra::render::FrameStats& stats = renderer->stats();  // waits for the frame's timings
+    printTimings(stats.passes);
+    fmt::print("entities {}, draw calls {}, triangles {}, lights {}\n", engine->world().aliveCount(),
+               stats.drawCalls, stats.triangles, stats.lights);
     // A run with validation errors failed: its outputs are not kept.
-    if (opt.validation && rhi::validationErrorCount(*device) != 0) {
+    if (opt.validation && renderer->validationErrors() != 0) {
         penumbra::log::error("{} validation error(s) reported; no output written",
-                             rhi::validationErrorCount(*device));
+                             renderer->validationErrors());
         return 1;
     }
     if (!outputs.commit(err)) {
@@ -176,8 +190,8 @@ int main(int argc, char** argv) {
     DeviceOptions demoOpt;
     std::string output = "out/default.png", graphviz;
     uint32_t width = 640, height = 360;
-    auto* demo =
-        app.add_subcommand("demo", "Render the RHI demo frame to a PNG and print per-pass GPU times");
+    auto* demo = app.add_subcommand(
+        "demo", "Render the built-in demo scene (no scene file) to a PNG and print per-pass GPU/CPU times");
     addDeviceOptions(demo, demoOpt);
     demo->add_option("-o,--output", output, "Output PNG path (.png)")->capture_default_str();
     penumbra::cli::addSizeOption(demo, "--width", width,
