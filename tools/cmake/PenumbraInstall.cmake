@@ -33,8 +33,9 @@ foreach(dir engine renderer)
   install(DIRECTORY ${PROJECT_SOURCE_DIR}/${dir}/ DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR}/${dir}
           FILES_MATCHING PATTERN "*.h" PATTERN "shaders" EXCLUDE)
 endforeach()
+# The RHI's method lists (device_api.inc, command_list_api.inc) are part of its public headers.
 install(DIRECTORY ${PROJECT_SOURCE_DIR}/rhi/include/rhi/ DESTINATION ${PENUMBRA_INSTALL_INCLUDEDIR}/rhi
-        FILES_MATCHING PATTERN "*.h")
+        FILES_MATCHING PATTERN "*.h" PATTERN "*.inc")
 
 install(EXPORT penumbraTargets NAMESPACE penumbra:: DESTINATION ${PENUMBRA_INSTALL_CMAKEDIR})
 configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/penumbraConfig.cmake.in
