@@ -175,6 +175,28 @@ TEST_P(DemoScene, EmbeddingApiDrawsTheSameFrame) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, DemoScene, testing::ValuesIn(gpuBackends()), backendName);
 
+// The builder's references: one per asset use, the previous scene in `out` released when it is
+// replaced, nothing left after unloadScene; every entity is named and the camera is "main".
+TEST(DemoSceneBuilder, ReferencesNamesAndReplacement) {
+    assets::AssetManager assets;
+    scene::Scene demo;
+    std::string error;
+    ASSERT_TRUE(scene::buildDemoScene(assets, demo, error)) << error;
+    EXPECT_EQ(demo.assetRefs.size(), 10u);  // five meshes, five materials
+    EXPECT_EQ(assets.count(assets::AssetKind::Mesh), 5u);
+    EXPECT_EQ(assets.count(assets::AssetKind::Material), 5u);
+    EXPECT_EQ(demo.world.aliveCount(), 9u);
+    EXPECT_EQ(demo.world.count<ecs::Name>(), 9u);
+    EXPECT_EQ(demo.world.count<ecs::Light>(), 3u);
+    EXPECT_EQ(demo.settings.camera, scene::kDemoCameraName);
+    EXPECT_NE(scene::findCamera(demo.world, scene::kDemoCameraName), ecs::kNullEntity);
+    ASSERT_TRUE(scene::buildDemoScene(assets, demo, error)) << error;  // replaces, does not add
+    EXPECT_EQ(demo.world.aliveCount(), 9u);
+    for (assets::AssetId id : demo.assetRefs) EXPECT_EQ(assets.refCount(id), 1u);
+    scene::unloadScene(demo, assets);
+    EXPECT_EQ(assets.count(), 0u);
+}
+
 // Backend parity: the same frame on Vulkan and OpenGL agrees under the golden rule.
 TEST(DemoSceneParity, VulkanMatchesOpenGL) {
     auto logVk = std::make_shared<LogCapture>();
