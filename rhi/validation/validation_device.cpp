@@ -284,6 +284,12 @@ public:
             report(fn, name + " is a Tex3D with depth format " + fi.name);
             return {};
         }
+        const FormatSupport support = m_inner->formatSupport(desc.format);
+        if (any(desc.usage & TextureUsage::Storage) && !any(support & FormatSupport::Storage)) {
+            report(fn, name + " has Storage usage but the device has no storage images of format " + fi.name +
+                           " (formatSupport: " + toString(support) + ")");
+            return {};
+        }
         const bool is3D = desc.dimension == TextureDimension::Tex3D;
         const uint32_t maxSize = is3D ? limits.maxTextureSize3D : limits.maxTextureSize2D;
         if (desc.width > maxSize || desc.height > maxSize || (is3D && desc.depthOrLayers > maxSize)) {

@@ -986,6 +986,18 @@ TEST_F(ValidationTest, BindGroupMipRangesAreCheckedAndTracked) {
     dev().submit(list);
 }
 
+TEST_F(ValidationTest, StorageUsageNeedsAStorageFormat) {
+    // Criterion: Storage usage on a format formatSupport() reports without Storage is refused.
+    EXPECT_FALSE(any(dev().formatSupport(rhi::Format::RGBA8_SRGB) & rhi::FormatSupport::Storage));
+    EXPECT_FALSE(makeTexture("srgb", rhi::Format::RGBA8_SRGB, TextureUsage::Storage).isValid());
+    expectExactError(
+        "validation: createTexture: texture 'srgb' has Storage usage but the device has no storage images of "
+        "format RGBA8_SRGB (formatSupport: sampled|filterable|colour|blend|vertex)");
+    EXPECT_TRUE(makeTexture("srgb", rhi::Format::RGBA8_SRGB, TextureUsage::Sampled).isValid());
+    EXPECT_TRUE(any(dev().formatSupport(rhi::Format::R32_UINT) & rhi::FormatSupport::StorageAtomic));
+    expectNoNewErrors();
+}
+
 TEST_F(ValidationTest, ReadTextureNeedsTheTrackedState) {
     rhi::TextureHandle t = makeTexture("t");
     std::vector<uint8_t> texels(16 * 16 * 4, 7), out;
