@@ -4,6 +4,7 @@
 //   penumbra demo -o out.png [--backend] [--width --height]   the built-in demo scene + timing table
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
+//   penumbra reference <scene> -o DIR --aov ...  CPU reference AOVs as PFM (cmd_reference.cpp)
 // Global flags (-v, --version, --help) are accepted before or after the subcommand. Every command
 // checks its inputs, outputs, backend and image size before the work and writes its outputs all or
 // nothing (cli_common.h, engine/core/output_file.h).
@@ -17,6 +18,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.h"
+#include "cmd_reference.h"
 #include "cmd_render.h"
 #include "cmd_sdf.h"
 #include "engine/core/log.h"
@@ -204,6 +206,8 @@ int main(int argc, char** argv) {
 
     penumbra::cli::RenderOptions renderOpt;
     auto* render = penumbra::cli::addRenderCommand(app, renderOpt);
+    penumbra::cli::ReferenceOptions referenceOpt;
+    auto* reference = penumbra::cli::addReferenceCommand(app, referenceOpt);
 
     penumbra::cli::BakeOptions bakeOpt;
     auto* bake = penumbra::cli::addBakeCommand(app, bakeOpt);
@@ -223,6 +227,7 @@ int main(int argc, char** argv) {
                                           : penumbra::log::Severity::Warning);
     if (info->parsed()) return runInfo(infoOpt);
     if (render->parsed()) return penumbra::cli::runRender(renderOpt);
+    if (reference->parsed()) return penumbra::cli::runReference(referenceOpt);
     if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
     if (bake->parsed()) {
         std::string commandLine;
