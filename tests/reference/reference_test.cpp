@@ -104,6 +104,16 @@ TEST(ReferenceSelfCheck, SphereLightBehindSphereMatchesCapOverlap) {
         EXPECT_LE(std::abs(e.value - exact), std::max(e.stdError, 1e-12))
             << "g " << g << ": visible " << e.value << " exact " << exact << " standard error " << e.stdError;
         EXPECT_LE(std::abs(e.value - exact), 0.005) << "g " << g;
+        // The same caps for a directional light of angular radius a (its cone toward +Y): the
+        // occluder hides the same directions, so the same closed form holds.
+        ReferenceLight sun;
+        sun.type = ecs::LightType::Directional;
+        sun.direction = {0, -1, 0};
+        sun.angularRadius = a;
+        const Estimate d = lightVisibility(*s, sun, p, n, 4096, 7);
+        std::printf("directional light g %.2f: visible %.5f exact %.5f standard error %.5f\n", g, d.value,
+                    exact, d.stdError);
+        EXPECT_LE(std::abs(d.value - exact), std::max(d.stdError, 1e-12)) << "directional, g " << g;
     }
 }
 

@@ -12,6 +12,8 @@
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
 
+#include "engine/core/log.h"
+
 namespace penumbra::reference {
 namespace {
 
@@ -169,6 +171,12 @@ std::unique_ptr<ReferenceScene> ReferenceScene::create(std::string& error) {
         error = fmt::format("Embree: cannot create a device (error {})", int(rtcGetDeviceError(nullptr)));
         return nullptr;
     }
+    rtcSetDeviceErrorFunction(
+        s->m_impl->device,
+        [](void*, RTCError code, const char* message) {
+            log::error("Embree error {}: {}", int(code), message ? message : "");
+        },
+        nullptr);
     s->m_impl->scene = rtcNewScene(s->m_impl->device);
     rtcSetSceneBuildQuality(s->m_impl->scene, RTC_BUILD_QUALITY_HIGH);
     rtcSetSceneFlags(s->m_impl->scene, RTC_SCENE_FLAG_ROBUST);
