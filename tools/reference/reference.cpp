@@ -684,17 +684,22 @@ bool render(const ReferenceScene& scene, const ReferenceCamera& camera, const Re
         }
         out.push_back(std::move(img));
     }
-    // Per-pixel standard errors (-1: no hit), summed in pixel order afterwards so the statistics do
-    // not depend on the thread count.
-    std::vector<std::vector<double>> se(out.size(), std::vector<double>(size_t(w) * h, -1.0));
-
     constexpr uint32_t kTile = 16;
     const uint32_t tilesX = (w + kTile - 1) / kTile, tilesY = (h + kTile - 1) / kTile;
     const uint32_t tileCount = tilesX * tilesY;
+    // Standard-error statistics per tile (each tile is one thread's, in pixel order), added up in
+    // tile order afterwards: the results do not depend on the thread count.
+    struct TileStats {
+        size_t hits = 0;
+        std::vector<double> sum, max;
+    };
+    std::vector<TileStats> tileStats(
+        tileCount, TileStats{0, std::vector<double>(out.size(), 0.0), std::vector<double>(out.size(), 0.0)});
     std::atomic<uint32_t> nextTile{0}, doneTiles{0};
     auto worker = [&]() {
         for (uint32_t tile = nextTile++; tile < tileCount; tile = nextTile++) {
             const uint32_t x0 = (tile % tilesX) * kTile, y0 = (tile / tilesX) * kTile;
+            TileStats& ts = tileStats[tile];
             for (uint32_t y = y0; y < std::min(h, y0 + kTile); ++y)
                 for (uint32_t x = x0; x < std::min(w, x0 + kTile); ++x) {
                     const glm::dvec3 ray = camera.pixelRay(x + 0.5, y + 0.5);
@@ -703,6 +708,7 @@ bool render(const ReferenceScene& scene, const ReferenceCamera& camera, const Re
                                          hit) ||
                         !(hit.t >= camera.nearPlane))
                         continue;
+                    ++ts.hits;
                     // Secondary rays leave the side of the surface the camera sees.
                     glm::dvec3 ng = hit.geometricNormal;
                     if (glm::dot(ng, ray) > 0.0) ng = -ng;
@@ -734,7 +740,8 @@ bool render(const ReferenceScene& scene, const ReferenceCamera& camera, const Re
                                 img.data[pixel] = float(e.value);
                                 break;
                         }
-                        se[a][pixel] = e.stdError;
+                        ts.sum[a] += e.stdError;
+                        ts.max[a] = std::max(ts.max[a], e.stdError);
                     }
                 }
             const uint32_t done = ++doneTiles;
@@ -747,15 +754,14 @@ bool render(const ReferenceScene& scene, const ReferenceCamera& camera, const Re
     for (uint32_t i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+    size_t hits = 0;
+    for (const TileStats& ts : tileStats) hits += ts.hits;
     for (size_t a = 0; a < out.size(); ++a) {
         double sum = 0.0, maxSe = 0.0;
-        size_t hits = 0;
-        for (double v : se[a])
-            if (v >= 0.0) {
-                sum += v;
-                maxSe = std::max(maxSe, v);
-                ++hits;
-            }
+        for (const TileStats& ts : tileStats) {
+            sum += ts.sum[a];
+            maxSe = std::max(maxSe, ts.max[a]);
+        }
         out[a].meanStdError = hits ? sum / double(hits) : 0.0;
         out[a].maxStdError = maxSe;
     }
