@@ -282,6 +282,24 @@ TEST(ReferenceRender, DeterministicWhateverTheThreadCount) {
     EXPECT_NE(error.find("shadow1"), std::string::npos) << error;
 }
 
+TEST(ReferenceRender, SamplesForError) {
+    // Criterion: N = k^2 with 0.5 / k <= E / 3 and k minimal: E = 0.02 -> k = 75, N = 5625.
+    EXPECT_EQ(samplesForError(0.02), 5625u);
+    EXPECT_EQ(samplesForError(0.05), 900u);  // k = 30
+    EXPECT_EQ(samplesForError(1.5), 1u);
+    EXPECT_EQ(samplesForError(0.0), 0u);
+    EXPECT_EQ(samplesForError(1e-6), 0u);  // more than 2^24 samples
+    EXPECT_EQ(stratifiedCount(1000), 1024u);
+    EXPECT_EQ(stratifiedCount(1024), 1024u);
+    EXPECT_EQ(stratifiedCount(1), 1u);
+    for (double e : {0.02, 0.05, 0.1}) {
+        const uint32_t n = samplesForError(e);
+        EXPECT_LE(0.5 / std::sqrt(double(n)), e / 3.0 + 1e-15);
+        const uint32_t k = uint32_t(std::lround(std::sqrt(double(n))));
+        EXPECT_GT(0.5 / double(k - 1), e / 3.0);  // one fewer per side would not do
+    }
+}
+
 TEST(ReferenceRender, AovListParsing) {
     std::vector<AovRequest> aovs;
     std::string error;

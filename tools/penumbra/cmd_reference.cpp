@@ -52,6 +52,11 @@ CLI::App* addReferenceCommand(CLI::App& app, ReferenceOptions& opt) {
                     "image's standard error")
         ->check(CLI::Range(1u, 1u << 20))
         ->capture_default_str();
+    cmd->add_option("--error", opt.targetError,
+                    "Instead of --samples: the size of the errors to measure; picks the smallest k*k whose "
+                    "standard-error bound is at most a third of it (0.02 -> 5625)")
+        ->check(CLI::Range(0.001, 10.0))
+        ->excludes(cmd->get_option("--samples"));
     cmd->add_option("--width", opt.width, "Image width in pixels (default: the scene's render.width)")
         ->check(CLI::Range(1u, 16384u));
     cmd->add_option("--height", opt.height, "Image height in pixels (default: the scene's render.height)")
@@ -139,7 +144,7 @@ int runReference(const ReferenceOptions& opt) {
 
     reference::RenderDesc desc;
     desc.aovs = aovs;
-    desc.samples = opt.samples;
+    desc.samples = opt.targetError > 0.0 ? reference::samplesForError(opt.targetError) : opt.samples;
     desc.aoMaxDistance = aoDistance;
     desc.seed = opt.seed;
     desc.threads = opt.threads;
@@ -149,7 +154,7 @@ int runReference(const ReferenceOptions& opt) {
     ProgressBar progress(progressOutput, progressSettings);
     desc.progress = [&](double f) { progress.update(f, "render"); };
     fmt::print("penumbra reference: {}, {}x{}, {} sample(s) per pixel, AOVs {}\n", opt.scene, width, height,
-               reference::stratifiedCount(opt.samples), opt.aovs);
+               reference::stratifiedCount(desc.samples), opt.aovs);
     const auto start = std::chrono::steady_clock::now();
     std::vector<reference::AovImage> images;
     if (!reference::render(*refScene, camera, desc, images, error)) {
@@ -164,7 +169,8 @@ int runReference(const ReferenceOptions& opt) {
     report["camera"] = cameraName;
     report["width"] = width;
     report["height"] = height;
-    report["samples"] = reference::stratifiedCount(opt.samples);
+    report["samples"] = reference::stratifiedCount(desc.samples);
+    report["targetError"] = opt.targetError > 0.0 ? nlohmann::json(opt.targetError) : nlohmann::json(nullptr);
     report["aoMaxDistance"] = jsonNumber(aoDistance);  // null: unbounded
     report["seed"] = opt.seed;
     report["seconds"] = seconds;

@@ -1,5 +1,5 @@
 // `penumbra reference <scene> -o DIR --aov depth,normal,ids,ao,shadow [--samples N] [--width W
-//  --height H] [--camera NAME] [--ao-distance D|inf] [--seed S] [--threads T] [--report FILE]` —
+//  --height H] [--error E] [--camera NAME] [--ao-distance D|inf] [--seed S] [--threads T] [--report FILE]` —
 // the CPU reference renderer (tools/reference/reference.h, docs/ACCURACY.md): loads the scene
 // through penumbra::Engine, renders the requested AOVs from the original geometry and writes one PFM
 // per AOV (DIR/<aov>.pfm) plus a JSON report with the standard error of every image (default
@@ -19,7 +19,8 @@ struct ReferenceOptions {
     std::string outputDir = "out/reference";
     std::string aovs = "depth,normal,ids";
     uint32_t samples = 1024;
-    uint32_t width = 0;  // 0: the scene's render settings
+    double targetError = 0.0;  // > 0: samples from reference::samplesForError (overrides samples)
+    uint32_t width = 0;        // 0: the scene's render settings
     uint32_t height = 0;
     std::string camera;
     std::string aoDistance = "1";

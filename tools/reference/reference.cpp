@@ -512,6 +512,13 @@ uint32_t stratifiedCount(uint32_t samples) {
     return k * k;
 }
 
+uint32_t samplesForError(double error) {
+    if (!(error > 0.0) || !std::isfinite(error)) return 0;
+    const double k = std::ceil(1.5 / error);  // 0.5 / sqrt(k * k) <= error / 3
+    if (k > 4096.0) return 0;
+    return uint32_t(k) * uint32_t(k);
+}
+
 Estimate ambientOcclusion(const ReferenceScene& scene, const glm::dvec3& point, const glm::dvec3& normal,
                           uint32_t samples, double maxDistance, uint64_t seed) {
     const uint32_t n = stratifiedCount(samples);

@@ -145,6 +145,10 @@ uint64_t pixelSeed(uint64_t seed, uint32_t x, uint32_t y, uint32_t stream);
 
 // Rounds a requested sample count up to the next k * k (k >= 1).
 uint32_t stratifiedCount(uint32_t samples);
+// The smallest k * k whose worst-case standard-error bound sqrt(1/4 / N) is at most error / 3: the
+// sample count for measuring errors of size `error` with the reference's noise 3x smaller.
+// 0 when error is not > 0 or needs more than 2^24 samples.
+uint32_t samplesForError(double error);
 
 // Cosine-weighted AO at `point` over the hemisphere of the unit `normal` (rays start at
 // point + normal * rayOffset): the fraction of rays with no hit closer than `maxDistance`.
