@@ -432,67 +432,96 @@ bool reflectLayouts(StageOutput& stage, std::vector<std::string>& diagnostics) {
     }
 }
 
-bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
-                             std::vector<std::string>& diagnostics) {
+namespace {
+
+// Collects the "where: error: message" diagnostics of the program-interface checks and
+// remembers whether any was reported.
+class InterfaceErrors {
+public:
+    explicit InterfaceErrors(std::vector<std::string>& diagnostics) : m_diagnostics(diagnostics) {}
+
+    void report(const std::string& where, const std::string& message) {
+        m_diagnostics.push_back(where + ": error: " + message);
+        m_ok = false;
+    }
+
+    bool ok() const { return m_ok; }
+
+private:
+    std::vector<std::string>& m_diagnostics;
+    bool m_ok = true;
+};
+
+// The program's layouts, one per GLSL type name, and the names in the order first declared.
+struct LayoutPool {
+    std::map<std::string, StructLayout> layouts;
+    std::vector<std::string> firstSeen;
+};
+
+// The stages of the program followed by those of each variant.
+std::vector<const StageOutput*> allStages(const ProgramOutput& program) {
     std::vector<const StageOutput*> stages;
     for (const StageOutput& s : program.stages) stages.push_back(&s);
     for (const VariantOutput& v : program.variants) {
         for (const StageOutput& s : v.stages) stages.push_back(&s);
     }
+    return stages;
+}
 
-    bool ok = true;
-    auto error = [&](const std::string& where, const std::string& message) {
-        diagnostics.push_back(where + ": error: " + message);
-        ok = false;
-    };
+// Whether a block named View is the shared per-view block; reports why when it is not.
+bool matchesViewBlock(const StructLayout& layout, const StructLayout& view, InterfaceErrors& errors) {
+    if (layout.kind != BlockKind::UniformBlock) {
+        errors.report(layout.origin, std::string("the name '") + kViewBlockName +
+                                         "' is reserved for the shared per-view uniform block (" +
+                                         "#include \"" + fs::path(view.origin).filename().string() + "\")");
+        return false;
+    }
+    if (layout.set != kViewSet || layout.binding != kViewBinding) {
+        errors.report(layout.origin, std::string("uniform block '") + kViewBlockName + "' is at set " +
+                                         std::to_string(layout.set) + ", binding " +
+                                         std::to_string(layout.binding) +
+                                         "; the shared per-view block is at set 0, binding 0");
+        return false;
+    }
+    const std::string difference = layoutDifference(view, layout, false);
+    if (!difference.empty()) {
+        errors.report(layout.origin, std::string("uniform block '") + kViewBlockName +
+                                         "' does not match the shared per-view block declared at " +
+                                         view.origin + ": " + difference +
+                                         " (#include \"view.glsl\" instead of declaring it)");
+        return false;
+    }
+    return true;
+}
 
-    // 1. One layout per name (a longer declaration of the same block absorbs a shorter one, as
-    //    Vulkan lets a stage declare only the members it reads); the View block is checked.
-    std::map<std::string, StructLayout> pool;
-    std::vector<std::string> firstSeen;
+// One layout per name (a longer declaration of the same block absorbs a shorter one, as Vulkan
+// lets a stage declare only the members it reads); the View block is checked and sets
+// program.usesView instead of entering the pool.
+LayoutPool mergeLayouts(const std::vector<const StageOutput*>& stages, const StructLayout* view,
+                        ProgramOutput& program, InterfaceErrors& errors) {
+    LayoutPool pool;
     program.usesView = false;
     for (const StageOutput* stage : stages) {
         for (const StructLayout& layout : stage->layouts) {
             if (view && layout.name == kViewBlockName) {
-                if (layout.kind != BlockKind::UniformBlock) {
-                    error(layout.origin, std::string("the name '") + kViewBlockName +
-                                             "' is reserved for the shared per-view uniform block (" +
-                                             "#include \"" + fs::path(view->origin).filename().string() +
-                                             "\")");
-                    continue;
-                }
-                if (layout.set != kViewSet || layout.binding != kViewBinding) {
-                    error(layout.origin, std::string("uniform block '") + kViewBlockName + "' is at set " +
-                                             std::to_string(layout.set) + ", binding " +
-                                             std::to_string(layout.binding) +
-                                             "; the shared per-view block is at set 0, binding 0");
-                    continue;
-                }
-                const std::string difference = layoutDifference(*view, layout, false);
-                if (!difference.empty()) {
-                    error(layout.origin, std::string("uniform block '") + kViewBlockName +
-                                             "' does not match the shared per-view block declared at " +
-                                             view->origin + ": " + difference +
-                                             " (#include \"view.glsl\" instead of declaring it)");
-                    continue;
-                }
-                program.usesView = true;
+                if (matchesViewBlock(layout, *view, errors)) program.usesView = true;
                 continue;
             }
-            auto it = pool.find(layout.name);
-            if (it == pool.end()) {
-                pool.emplace(layout.name, layout);
-                firstSeen.push_back(layout.name);
+            auto it = pool.layouts.find(layout.name);
+            if (it == pool.layouts.end()) {
+                pool.layouts.emplace(layout.name, layout);
+                pool.firstSeen.push_back(layout.name);
                 continue;
             }
             StructLayout& existing = it->second;
             const bool longer = layout.members.size() > existing.members.size();
             const std::string difference = layoutDifference(existing, layout, true);
             if (!difference.empty()) {
-                error(layout.origin,
-                      "'" + layout.name + "' has a different layout here than at " + existing.origin + ": " +
-                          difference +
-                          "; a program gets one C++ struct per GLSL type name, so rename one of them");
+                errors.report(
+                    layout.origin,
+                    "'" + layout.name + "' has a different layout here than at " + existing.origin + ": " +
+                        difference +
+                        "; a program gets one C++ struct per GLSL type name, so rename one of them");
                 continue;
             }
             if (longer) {
@@ -502,8 +531,12 @@ bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
             }
         }
     }
+    return pool;
+}
 
-    // 2. Push constants: one block name for the whole program.
+// Push constants: one block name for the whole program.
+void resolvePushConstantBlock(const std::vector<const StageOutput*>& stages, ProgramOutput& program,
+                              InterfaceErrors& errors) {
     program.pushConstantStruct.clear();
     std::string pushOrigin;
     for (const StageOutput* stage : stages) {
@@ -512,118 +545,130 @@ bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
             program.pushConstantStruct = stage->pushConstantBlock;
             pushOrigin = stage->path;
         } else if (program.pushConstantStruct != stage->pushConstantBlock) {
-            error(stage->path, "the push-constant block is '" + stage->pushConstantBlock + "' here but '" +
-                                   program.pushConstantStruct + "' in " + pushOrigin +
-                                   "; the stages of a program share one push-constant block type");
+            errors.report(stage->path, "the push-constant block is '" + stage->pushConstantBlock +
+                                           "' here but '" + program.pushConstantStruct + "' in " +
+                                           pushOrigin +
+                                           "; the stages of a program share one push-constant block type");
         }
     }
-    if (!ok) return false;
+}
 
-    // 3. Struct sizes: an array of structs pads its element struct to the array stride.
+// The array stride of each struct that appears as an array element (runtime arrays of blocks,
+// then struct arrays inside the pooled layouts); one struct cannot have two strides.
+std::map<std::string, uint32_t> collectArrayStrides(const std::vector<const StageOutput*>& stages,
+                                                    const LayoutPool& pool, InterfaceErrors& errors) {
     std::map<std::string, uint32_t> strides;
     for (const StageOutput* stage : stages) {
         for (const StructLayout& layout : stage->layouts) {
             if (layout.runtimeArrayStride == 0) continue;
             auto [it, inserted] = strides.emplace(layout.name, layout.runtimeArrayStride);
             if (!inserted && it->second != layout.runtimeArrayStride) {
-                error(layout.origin, "arrays of struct '" + layout.name + "' have strides of " +
-                                         std::to_string(it->second) + " and " +
-                                         std::to_string(layout.runtimeArrayStride) +
-                                         " bytes: one C++ struct cannot have both sizes");
+                errors.report(layout.origin, "arrays of struct '" + layout.name + "' have strides of " +
+                                                 std::to_string(it->second) + " and " +
+                                                 std::to_string(layout.runtimeArrayStride) +
+                                                 " bytes: one C++ struct cannot have both sizes");
             }
         }
     }
-    for (const std::string& name : firstSeen) {
-        for (const StructMember& m : pool.at(name).members) {
+    for (const std::string& name : pool.firstSeen) {
+        for (const StructMember& m : pool.layouts.at(name).members) {
             if (!m.isStruct || m.arraySize == 0) continue;
             auto [it, inserted] = strides.emplace(m.cppType, m.arrayStride);
             if (!inserted && it->second != m.arrayStride) {
-                error(pool.at(name).origin, "arrays of struct '" + m.cppType + "' have strides of " +
-                                                std::to_string(it->second) + " and " +
-                                                std::to_string(m.arrayStride) +
-                                                " bytes: one C++ struct cannot have both sizes");
+                errors.report(pool.layouts.at(name).origin,
+                              "arrays of struct '" + m.cppType + "' have strides of " +
+                                  std::to_string(it->second) + " and " + std::to_string(m.arrayStride) +
+                                  " bytes: one C++ struct cannot have both sizes");
             }
         }
     }
-    if (!ok) return false;
-    // Sizes depend on nested structs: resolve in dependency order.
+    return strides;
+}
+
+// The pooled struct names with every nested struct before the structs that contain it.
+std::vector<std::string> dependencyOrder(const LayoutPool& pool) {
     std::vector<std::string> order;
     std::set<std::string> visiting, done;
     std::function<void(const std::string&)> visit = [&](const std::string& name) {
         if (done.count(name) || visiting.count(name)) return;
         visiting.insert(name);
-        for (const StructMember& m : pool.at(name).members) {
-            if (m.isStruct && pool.count(m.cppType)) visit(m.cppType);
+        for (const StructMember& m : pool.layouts.at(name).members) {
+            if (m.isStruct && pool.layouts.count(m.cppType)) visit(m.cppType);
         }
         visiting.erase(name);
         done.insert(name);
         order.push_back(name);
     };
-    for (const std::string& name : firstSeen) visit(name);
+    for (const std::string& name : pool.firstSeen) visit(name);
+    return order;
+}
 
-    for (const std::string& name : order) {
-        StructLayout& layout = pool.at(name);
-        uint32_t end = 0;
-        for (size_t i = 0; i < layout.members.size(); ++i) {
-            StructMember& m = layout.members[i];
-            if (m.isStruct) {
-                auto nested = pool.find(m.cppType);
-                if (nested == pool.end()) {
-                    error(layout.origin, "internal: struct '" + m.cppType + "' was not reflected");
-                    continue;
-                }
-                m.elementSize = nested->second.size;
-                if (m.arraySize > 0 && m.arrayStride != m.elementSize) {
-                    error(m.origin, "member '" + m.name + "' of '" + name + "': struct '" + m.cppType +
-                                        "' is " + std::to_string(m.elementSize) +
-                                        " bytes in C++ but its array stride is " +
-                                        std::to_string(m.arrayStride));
-                    continue;
-                }
-                m.size = m.elementSize * std::max(m.arraySize, 1u);
+// Sizes of the struct members and of the struct `name` (its nested structs already sized):
+// members may not overlap in C++, and the size is padded to its array stride and to 4 bytes.
+void sizeStruct(const std::string& name, LayoutPool& pool, const std::map<std::string, uint32_t>& strides,
+                InterfaceErrors& errors) {
+    StructLayout& layout = pool.layouts.at(name);
+    uint32_t end = 0;
+    for (size_t i = 0; i < layout.members.size(); ++i) {
+        StructMember& m = layout.members[i];
+        if (m.isStruct) {
+            auto nested = pool.layouts.find(m.cppType);
+            if (nested == pool.layouts.end()) {
+                errors.report(layout.origin, "internal: struct '" + m.cppType + "' was not reflected");
+                continue;
             }
-            if (m.offset < end) {
-                error(m.origin, "member '" + m.name + "' of '" + name + "' at offset " +
-                                    std::to_string(m.offset) +
-                                    " overlaps the previous member, which ends at " + std::to_string(end) +
-                                    " in C++: this layout cannot be expressed");
+            m.elementSize = nested->second.size;
+            if (m.arraySize > 0 && m.arrayStride != m.elementSize) {
+                errors.report(m.origin, "member '" + m.name + "' of '" + name + "': struct '" + m.cppType +
+                                            "' is " + std::to_string(m.elementSize) +
+                                            " bytes in C++ but its array stride is " +
+                                            std::to_string(m.arrayStride));
+                continue;
             }
-            end = m.offset + m.size;
+            m.size = m.elementSize * std::max(m.arraySize, 1u);
         }
-        uint32_t size = std::max(end, layout.declaredSize);
-        auto stride = strides.find(name);
-        if (stride != strides.end()) {
-            if (stride->second < size) {
-                error(layout.origin, "struct '" + name + "' is " + std::to_string(size) +
-                                         " bytes but an array of it has a stride of " +
-                                         std::to_string(stride->second) + " bytes");
-            }
-            size = std::max(size, stride->second);
+        if (m.offset < end) {
+            errors.report(m.origin, "member '" + m.name + "' of '" + name + "' at offset " +
+                                        std::to_string(m.offset) +
+                                        " overlaps the previous member, which ends at " +
+                                        std::to_string(end) + " in C++: this layout cannot be expressed");
         }
-        layout.size = (size + 3u) & ~3u;
+        end = m.offset + m.size;
     }
-    if (!ok) return false;
-    program.structs.clear();
-    for (const std::string& name : order) program.structs.push_back(pool.at(name));
+    uint32_t size = std::max(end, layout.declaredSize);
+    auto stride = strides.find(name);
+    if (stride != strides.end()) {
+        if (stride->second < size) {
+            errors.report(layout.origin, "struct '" + name + "' is " + std::to_string(size) +
+                                             " bytes but an array of it has a stride of " +
+                                             std::to_string(stride->second) + " bytes");
+        }
+        size = std::max(size, stride->second);
+    }
+    layout.size = (size + 3u) & ~3u;
+}
 
-    // 4. Named slots: one (set, binding) per binding name over all stages and variants.
+// Named slots: one (set, binding) per binding name over all stages and variants, sorted by
+// (set, binding, name) into program.slots.
+void resolveSlots(const std::vector<const StageOutput*>& stages, ProgramOutput& program,
+                  InterfaceErrors& errors) {
     std::map<std::string, std::pair<Binding, std::string>> slots;
     for (const StageOutput* stage : stages) {
         for (const Binding& b : stage->bindings) {
             auto [it, inserted] = slots.emplace(b.name, std::make_pair(b, stage->path));
             if (inserted) {
                 if (isCppOnlyKeyword(b.name)) {
-                    error(stage->path, "binding name '" + b.name + "' is a C++ keyword; rename it");
+                    errors.report(stage->path, "binding name '" + b.name + "' is a C++ keyword; rename it");
                 }
                 continue;
             }
             const Binding& a = it->second.first;
             if (a.set != b.set || a.binding != b.binding || a.type != b.type || a.count != b.count) {
-                error(stage->path, "the name '" + b.name + "' means set " + std::to_string(b.set) +
-                                       ", binding " + std::to_string(b.binding) + " here but set " +
-                                       std::to_string(a.set) + ", binding " + std::to_string(a.binding) +
-                                       " in " + it->second.second +
-                                       " (or a different type or count): a name must mean one slot");
+                errors.report(stage->path, "the name '" + b.name + "' means set " + std::to_string(b.set) +
+                                               ", binding " + std::to_string(b.binding) + " here but set " +
+                                               std::to_string(a.set) + ", binding " +
+                                               std::to_string(a.binding) + " in " + it->second.second +
+                                               " (or a different type or count): a name must mean one slot");
             }
         }
     }
@@ -632,7 +677,31 @@ bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
     std::sort(program.slots.begin(), program.slots.end(), [](const Binding& a, const Binding& b) {
         return std::tie(a.set, a.binding, a.name) < std::tie(b.set, b.binding, b.name);
     });
-    return ok;
+}
+
+}  // namespace
+
+bool resolveProgramInterface(ProgramOutput& program, const StructLayout* view,
+                             std::vector<std::string>& diagnostics) {
+    const std::vector<const StageOutput*> stages = allStages(program);
+    InterfaceErrors errors(diagnostics);
+
+    LayoutPool pool = mergeLayouts(stages, view, program, errors);
+    resolvePushConstantBlock(stages, program, errors);
+    if (!errors.ok()) return false;
+
+    // Struct sizes: an array of structs pads its element struct to the array stride; sizes depend
+    // on nested structs, so they are resolved in dependency order.
+    const std::map<std::string, uint32_t> strides = collectArrayStrides(stages, pool, errors);
+    if (!errors.ok()) return false;
+    const std::vector<std::string> order = dependencyOrder(pool);
+    for (const std::string& name : order) sizeStruct(name, pool, strides, errors);
+    if (!errors.ok()) return false;
+    program.structs.clear();
+    for (const std::string& name : order) program.structs.push_back(pool.layouts.at(name));
+
+    resolveSlots(stages, program, errors);
+    return errors.ok();
 }
 
 }  // namespace penumbra::shaderc::detail
