@@ -19,7 +19,7 @@
 // may only change between neighbours whose segment can cross the surface (d(u) + d(v) <= voxel);
 // where it changes between neighbours farther out, the mesh intersects or touches itself or holds
 // nested shells, and the winding number (signed ray crossings, exact for closed meshes) corrects
-// the affected region by spreading from those voxels (see bake()).
+// the affected region by spreading from those voxels (see repairPseudonormalSigns()).
 #include "engine/sdf/bake.h"
 
 #include <algorithm>
@@ -422,39 +422,26 @@ std::vector<uint32_t> latticeAxis(uint32_t n, uint32_t step) {
 
 namespace {
 
-void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeResult& result) {
-    const Clock::time_point start = Clock::now();
-    const uint32_t threads =
-        settings.threads ? settings.threads : std::max(1u, std::thread::hardware_concurrency());
-    CleanMesh clean;
-    if (!cleanMesh(mesh, clean, result.error, threads)) {
-        result.diagnostics = clean.diagnostics;
-        return;
-    }
-    result.diagnostics = clean.diagnostics;
-    result.timings.cleanupMs = msSince(start);
-    if (clean.triangles.empty()) {
-        result.error = fmt::format("mesh has no non-degenerate triangles ({} degenerate removed)",
-                                   clean.diagnostics.degenerateTrianglesRemoved);
-        return;
-    }
+// Everything after the clean-up works in a normalised frame: the local coordinates scaled by a
+// power of two (exact in binary floating point) that brings the longest extent into [0.5, 1), so
+// neither the BVH's float bounds nor squared distances overflow or underflow whatever the mesh's
+// units. Distances are scaled back at the end; for meshes of ordinary size the result is the same.
+struct UnitScale {
+    double toUnit = 1;
+    double fromUnit = 1;
+};
 
-    Placement placement;
-    if (!placeGrid(clean.diagnostics, settings, placement, result.error)) return;
-
-    // Everything below works in a normalised frame: the local coordinates scaled by a power of two
-    // (exact in binary floating point) that brings the longest extent into [0.5, 1), so neither the
-    // BVH's float bounds nor squared distances overflow or underflow whatever the mesh's units.
-    // Distances are scaled back at the end; for meshes of ordinary size the result is the same.
-    const MeshDiagnostics& diag = clean.diagnostics;
-    const glm::dvec3 extent = diag.boundsMax - diag.boundsMin;
+UnitScale unitScale(const glm::dvec3& extent) {
     int exponent = 0;
     std::frexp(std::max({extent.x, extent.y, extent.z}), &exponent);
-    const double toUnit = std::ldexp(1.0, -exponent), fromUnit = std::ldexp(1.0, exponent);
-    for (glm::dvec3& p : clean.positions) p *= toUnit;
+    return {std::ldexp(1.0, -exponent), std::ldexp(1.0, exponent)};
+}
 
-    // Inside-out: flip a closed mesh whose triangles all face inward (so its winding number is -1
-    // inside and its pseudonormals point in).
+// Inside-out: flips a closed mesh whose triangles all face inward (so its winding number is -1
+// inside and its pseudonormals point in) when the settings ask for it. Returns the description of
+// the mesh's orientation used in the sign reason.
+std::string orientMesh(CleanMesh& clean, const BakeSettings& settings, BakeResult& result) {
+    const MeshDiagnostics& diag = clean.diagnostics;
     if (diag.inwardOriented && settings.flipInsideOut) {
         for (glm::uvec3& t : clean.triangles) std::swap(t.y, t.z);
         for (glm::uvec3& t : clean.windingTriangles) std::swap(t.y, t.z);
@@ -465,62 +452,86 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
             "its inside bakes negative",
             diag.signedVolume);
     }
-    const std::string orientation =
-        !diag.inwardOriented      ? "closed, consistently oriented manifold"
-        : result.flippedInsideOut ? "closed manifold, consistently oriented inward (inside out, flipped)"
-                                  : "closed manifold, consistently oriented inward (inside out, not flipped)";
+    return !diag.inwardOriented ? "closed, consistently oriented manifold"
+           : result.flippedInsideOut
+               ? "closed manifold, consistently oriented inward (inside out, flipped)"
+               : "closed manifold, consistently oriented inward (inside out, not flipped)";
+}
 
-    // Sign method.
-    SignMethod method = settings.sign;
-    bool repairPseudonormal = false;
-    if (method == SignMethod::Auto) {
-        if (diag.closedManifold && diag.inconsistentEdges == 0) {
-            method = SignMethod::Pseudonormal;
-            repairPseudonormal = true;
-        } else if (diag.closedManifold) {
-            method = SignMethod::Winding;
-            result.signReason =
-                fmt::format("closed manifold but {} edges are inconsistently oriented -> winding",
-                            diag.inconsistentEdges);
-        } else {
-            method = SignMethod::Winding;
-            result.signReason =
-                fmt::format("open or non-manifold mesh ({} boundary edges, {} non-manifold edges) -> winding",
-                            diag.boundaryEdges, diag.nonManifoldEdges);
-        }
+struct SignChoice {
+    SignMethod method = SignMethod::Auto;
+    bool repairPseudonormal = false;  // auto on a closed, consistent mesh: pseudonormal, then checked
+};
+
+// The sign method for `requested` (auto picks from the mesh's topology) and, except for the
+// checked pseudonormal whose reason depends on the check, the reason for it.
+SignChoice chooseSignMethod(const MeshDiagnostics& diag, SignMethod requested, const std::string& orientation,
+                            std::string& reason) {
+    SignChoice choice;
+    choice.method = requested;
+    if (requested != SignMethod::Auto) {
+        reason = fmt::format("{} requested", toString(requested));
+        if (diag.inwardOriented) reason += "; " + orientation;
+    } else if (diag.closedManifold && diag.inconsistentEdges == 0) {
+        choice.method = SignMethod::Pseudonormal;
+        choice.repairPseudonormal = true;
+    } else if (diag.closedManifold) {
+        choice.method = SignMethod::Winding;
+        reason = fmt::format("closed manifold but {} edges are inconsistently oriented -> winding",
+                             diag.inconsistentEdges);
     } else {
-        result.signReason = fmt::format("{} requested", toString(method));
-        if (diag.inwardOriented) result.signReason += "; " + orientation;
+        choice.method = SignMethod::Winding;
+        reason =
+            fmt::format("open or non-manifold mesh ({} boundary edges, {} non-manifold edges) -> winding",
+                        diag.boundaryEdges, diag.nonManifoldEdges);
+    }
+    return choice;
+}
+
+// Progress of the whole bake as one fraction: distance first (distanceShare of it), then the sign.
+class BakeProgress {
+public:
+    BakeProgress(const BakeSettings& settings, double distanceShare)
+        : m_settings(settings), m_distanceShare(distanceShare) {}
+
+    void report(double fraction, const char* phase) const {
+        if (m_settings.progress) m_settings.progress(std::clamp(fraction, 0.0, 1.0), phase);
     }
 
-    // Progress: distance first, then the sign; reported as one fraction of the whole bake.
-    const double distanceShare = method == SignMethod::Pseudonormal ? (repairPseudonormal ? 0.97 : 1.0) : 0.6;
-    auto report = [&](double fraction, const char* phase) {
-        if (settings.progress) settings.progress(std::clamp(fraction, 0.0, 1.0), phase);
-    };
+    // parallelFor callbacks (empty without a progress callback): the distance phase, and the
+    // first `share` of the sign phase.
+    std::function<void(double)> distance() const {
+        if (!m_settings.progress) return {};
+        return [this](double f) { report(f * m_distanceShare, "distance"); };
+    }
+    std::function<void(double)> sign(double share) const {
+        if (!m_settings.progress) return {};
+        return
+            [this, share](double f) { report(m_distanceShare + share * f * (1 - m_distanceShare), "sign"); };
+    }
 
-    Clock::time_point t0 = Clock::now();
-    TriangleBvh bvh;
-    bvh.build(clean.positions, clean.triangles, threads);
-    const Pseudonormals pseudonormals(clean);
-    const bool needPseudonormals = method == SignMethod::Pseudonormal;
-    result.timings.bvhMs = msSince(t0);
+private:
+    const BakeSettings& m_settings;
+    double m_distanceShare;
+};
 
-    SdfGrid& grid = result.grid;  // normalised voxel size and distances until the end
+// Sets up the grid of the placement in the normalised frame (distances all 0) and returns the
+// local position of its corner.
+glm::dvec3 allocateGrid(SdfGrid& grid, const Placement& placement, const glm::dvec3& center, double toUnit) {
     grid.dims = placement.dims;
     grid.voxelSize = placement.voxelSize * toUnit;
-    const glm::dvec3 originLocal = -0.5 * glm::dvec3(grid.dims) * grid.voxelSize;
-    grid.origin = clean.center - 0.5 * glm::dvec3(grid.dims) * placement.voxelSize;
-    const size_t voxelCount = size_t(grid.dims.x) * grid.dims.y * grid.dims.z;
-    resizeHuge(grid.distances, voxelCount, 0.0f);
-    std::vector<uint8_t> negative;  // pseudonormal signs
-    if (needPseudonormals) resizeHuge(negative, voxelCount, uint8_t(0));
+    grid.origin = center - 0.5 * glm::dvec3(grid.dims) * placement.voxelSize;
+    resizeHuge(grid.distances, size_t(grid.dims.x) * grid.dims.y * grid.dims.z, 0.0f);
+    return -0.5 * glm::dvec3(grid.dims) * grid.voxelSize;
+}
 
-    // Distances: one task per brick of kBrick^3 voxels, walked back and forth along x and y so
-    // consecutive voxels are neighbours and each query starts from the previous voxel's closest
-    // triangle (bricks keep the BVH nodes a task touches few and cached).
-    t0 = Clock::now();
-    report(0, "distance");
+// Distances: one task per brick of kBrick^3 voxels, walked back and forth along x and y so
+// consecutive voxels are neighbours and each query starts from the previous voxel's closest
+// triangle (bricks keep the BVH nodes a task touches few and cached). With `negative`, the
+// pseudonormal sign of every voxel too (1: inside).
+void computeDistances(SdfGrid& grid, const glm::dvec3& originLocal, const TriangleBvh& bvh,
+                      const Pseudonormals& pseudonormals, std::vector<uint8_t>* negative, uint32_t threads,
+                      const std::function<void(double)>& progress) {
     const glm::uvec3 bricks = (grid.dims + (kBrick - 1)) / kBrick;
     parallelFor(
         threads, size_t(bricks.x) * bricks.y * bricks.z,
@@ -541,108 +552,105 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
                         seed = hit.triangle;
                         const size_t idx = grid.index(i, j, k);
                         grid.distances[idx] = static_cast<float>(hit.distance);
-                        if (needPseudonormals) {
-                            negative[idx] = glm::dot(p - hit.point, pseudonormals.normal(hit)) < 0 ? 1 : 0;
+                        if (negative) {
+                            (*negative)[idx] = glm::dot(p - hit.point, pseudonormals.normal(hit)) < 0 ? 1 : 0;
                         }
                     }
                     ++row;
                 }
             }
         },
-        settings.progress
-            ? std::function<void(double)>([&](double f) { report(f * distanceShare, "distance"); })
-            : std::function<void(double)>());
-    result.timings.distanceMs = msSince(t0);
+        progress);
+}
 
-    // Sign.
-    t0 = Clock::now();
-    std::unique_ptr<WindingNumber> winding;
-    std::unique_ptr<SignSolver> solver;
-    uint64_t repairEvaluations = 0;
-    auto signProgress = [&](double f) { report(distanceShare + f * (1 - distanceShare), "sign"); };
-    auto makeSolver = [&](bool parity) {
-        if (!winding) {
-            winding = std::make_unique<WindingNumber>(
-                clean.positions, clean.separateWinding ? clean.windingTriangles : clean.triangles);
-        }
-        if (!solver) solver = std::make_unique<SignSolver>(grid, originLocal, *winding, parity);
-    };
-
-    if (repairPseudonormal) {
-        // A closed, consistently oriented mesh can still intersect itself, hold nested shells or
-        // touch itself at a vertex; there the closest feature's side is not the inside/outside of
-        // the winding number. Such errors give themselves away: the sign can only change between
-        // neighbouring voxels u, v whose segment crosses the surface, which needs
-        // d(u) + d(v) <= voxel size. Where neighbours farther from the mesh disagree, the winding
-        // number (for a closed mesh: the signed ray-crossing count, median of three rays) is
-        // evaluated at both, and from every voxel whose sign it corrects the check
-        // spreads to that voxel's six neighbours (in waves, threads over each wave), so a wrong
-        // region connected to such a pair is corrected up to and including its boundary. Should
-        // that reach kRepairShare of the grid, the winding path takes over. (Tolerance of the
-        // pair test: float rounding of the stored distances and geometry.)
-        const float separated =
-            static_cast<float>(grid.voxelSize * (1 + 1e-4) + 1e-6 * glm::length(extent * toUnit));
-        const glm::uvec3 dims = grid.dims;
-        const size_t stride[3] = {1, dims.x, size_t(dims.x) * dims.y};
-        auto forNeighbours = [&](size_t idx, auto&& fn) {
-            const uint32_t i = uint32_t(idx % dims.x), j = uint32_t((idx / dims.x) % dims.y),
-                           k = uint32_t(idx / stride[2]);
-            const uint32_t c[3] = {i, j, k};
-            for (int a = 0; a < 3; ++a) {
-                if (c[a] > 0) fn(idx - stride[a]);
-                if (c[a] + 1 < dims[a]) fn(idx + stride[a]);
-            }
-        };
-        // Wave 0: both voxels of every inconsistent pair.
-        std::vector<size_t> wave;
-        std::mutex waveMutex;
-        parallelFor(threads, dims.z,
-                    [&](size_t k) {
-                        std::vector<size_t> local;
-                        for (uint32_t j = 0; j < dims.y; ++j) {
-                            for (uint32_t i = 0; i < dims.x; ++i) {
-                                const size_t idx = grid.index(i, j, uint32_t(k));
-                                const size_t next[3] = {i + 1 < dims.x ? idx + 1 : idx,
-                                                        j + 1 < dims.y ? idx + stride[1] : idx,
-                                                        k + 1 < dims.z ? idx + stride[2] : idx};
-                                for (size_t n : next) {
-                                    if (negative[n] != negative[idx] &&
-                                        grid.distances[idx] + grid.distances[n] > separated) {
-                                        local.push_back(idx);
-                                        local.push_back(n);
-                                    }
+// Both voxels of every pair of neighbours with different pseudonormal signs whose distances add
+// up to more than `separated` (so their segment cannot cross the surface).
+std::vector<size_t> inconsistentPairs(const SdfGrid& grid, const std::vector<uint8_t>& negative,
+                                      float separated, uint32_t threads) {
+    const glm::uvec3 dims = grid.dims;
+    const size_t stride[3] = {1, dims.x, size_t(dims.x) * dims.y};
+    std::vector<size_t> wave;
+    std::mutex waveMutex;
+    parallelFor(threads, dims.z,
+                [&](size_t k) {
+                    std::vector<size_t> local;
+                    for (uint32_t j = 0; j < dims.y; ++j) {
+                        for (uint32_t i = 0; i < dims.x; ++i) {
+                            const size_t idx = grid.index(i, j, uint32_t(k));
+                            const size_t next[3] = {i + 1 < dims.x ? idx + 1 : idx,
+                                                    j + 1 < dims.y ? idx + stride[1] : idx,
+                                                    k + 1 < dims.z ? idx + stride[2] : idx};
+                            for (size_t n : next) {
+                                if (negative[n] != negative[idx] &&
+                                    grid.distances[idx] + grid.distances[n] > separated) {
+                                    local.push_back(idx);
+                                    local.push_back(n);
                                 }
                             }
                         }
-                        if (!local.empty()) {
-                            std::lock_guard lock(waveMutex);
-                            wave.insert(wave.end(), local.begin(), local.end());
-                        }
-                    },
-                    {});
-        const uint64_t pairs = wave.size() / 2;
-        repairEvaluations = 0;
-        uint64_t corrected = 0;
-        bool tooMany = false;
-        if (!wave.empty()) {
-            std::vector<uint8_t> queued;
-            resizeHuge(queued, voxelCount, uint8_t(0));
-            std::sort(wave.begin(), wave.end());
-            wave.erase(std::unique(wave.begin(), wave.end()), wave.end());
-            for (size_t idx : wave) queued[idx] = 1;
-            const uint64_t budget = std::max<uint64_t>(4096, uint64_t(kRepairShare * double(voxelCount)));
-            uint64_t processed = 0;
-            std::vector<uint8_t> changed;
-            while (!wave.empty()) {
-                processed += wave.size();
-                if (processed > budget) {
-                    tooMany = true;
-                    break;
-                }
-                repairEvaluations += wave.size();
-                changed.assign(wave.size(), 0);
-                parallelFor(
-                    threads, (wave.size() + 255) / 256,
+                    }
+                    if (!local.empty()) {
+                        std::lock_guard lock(waveMutex);
+                        wave.insert(wave.end(), local.begin(), local.end());
+                    }
+                },
+                {});
+    return wave;
+}
+
+struct SignRepair {
+    uint64_t pairs = 0;        // inconsistent pairs of neighbours found
+    uint64_t corrected = 0;    // voxels whose sign the winding number changed
+    uint64_t evaluations = 0;  // winding-number evaluations
+    bool tooMany = false;      // the repair budget was exceeded: the winding path takes over
+};
+
+// A closed, consistently oriented mesh can still intersect itself, hold nested shells or touch
+// itself at a vertex; there the closest feature's side is not the inside/outside of the winding
+// number. Such errors give themselves away: the sign can only change between neighbouring voxels
+// u, v whose segment crosses the surface, which needs d(u) + d(v) <= voxel size (`separated`:
+// with the tolerance of float rounding of the stored distances and geometry). Where neighbours
+// farther from the mesh disagree, the winding number (for a closed mesh: the signed ray-crossing
+// count, median of three rays) is evaluated at both, and from every voxel whose sign it corrects
+// the check spreads to that voxel's six neighbours (in waves, threads over each wave), so a wrong
+// region connected to such a pair is corrected up to and including its boundary. Should that
+// reach kRepairShare of the grid, the repair stops (tooMany).
+SignRepair repairPseudonormalSigns(const SdfGrid& grid, const glm::dvec3& originLocal, const TriangleBvh& bvh,
+                                   float separated, std::vector<uint8_t>& negative, uint32_t threads) {
+    const glm::uvec3 dims = grid.dims;
+    const size_t stride[3] = {1, dims.x, size_t(dims.x) * dims.y};
+    const size_t voxelCount = grid.distances.size();
+    auto forNeighbours = [&](size_t idx, auto&& fn) {
+        const uint32_t i = uint32_t(idx % dims.x), j = uint32_t((idx / dims.x) % dims.y),
+                       k = uint32_t(idx / stride[2]);
+        const uint32_t c[3] = {i, j, k};
+        for (int a = 0; a < 3; ++a) {
+            if (c[a] > 0) fn(idx - stride[a]);
+            if (c[a] + 1 < dims[a]) fn(idx + stride[a]);
+        }
+    };
+    SignRepair repair;
+    std::vector<size_t> wave = inconsistentPairs(grid, negative, separated, threads);  // wave 0
+    repair.pairs = wave.size() / 2;
+    if (wave.empty()) return repair;
+
+    std::vector<uint8_t> queued;
+    resizeHuge(queued, voxelCount, uint8_t(0));
+    std::sort(wave.begin(), wave.end());
+    wave.erase(std::unique(wave.begin(), wave.end()), wave.end());
+    for (size_t idx : wave) queued[idx] = 1;
+    const uint64_t budget = std::max<uint64_t>(4096, uint64_t(kRepairShare * double(voxelCount)));
+    uint64_t processed = 0;
+    std::vector<uint8_t> changed;
+    while (!wave.empty()) {
+        processed += wave.size();
+        if (processed > budget) {
+            repair.tooMany = true;
+            break;
+        }
+        repair.evaluations += wave.size();
+        changed.assign(wave.size(), 0);
+        parallelFor(threads, (wave.size() + 255) / 256,
                     [&](size_t chunk) {
                         for (size_t w = chunk * 256; w < std::min(wave.size(), chunk * 256 + 256); ++w) {
                             const size_t idx = wave[w];
@@ -657,82 +665,91 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
                         }
                     },
                     {});
-                std::vector<size_t> next;
-                for (size_t w = 0; w < wave.size(); ++w) {
-                    if (!changed[w]) continue;
-                    ++corrected;
-                    const size_t idx = wave[w];
-                    forNeighbours(idx, [&](size_t n) {
-                        if (!queued[n]) {
-                            queued[n] = 1;
-                            next.push_back(n);
-                        }
-                    });
+        std::vector<size_t> next;
+        for (size_t w = 0; w < wave.size(); ++w) {
+            if (!changed[w]) continue;
+            ++repair.corrected;
+            const size_t idx = wave[w];
+            forNeighbours(idx, [&](size_t n) {
+                if (!queued[n]) {
+                    queued[n] = 1;
+                    next.push_back(n);
                 }
-                wave.swap(next);
-            }
+            });
         }
-        if (pairs == 0) {
-            result.signReason = orientation + " -> pseudonormal";
-        } else if (!tooMany) {
-            result.signReason = fmt::format(
-                "{} -> pseudonormal; {} pairs of neighbouring voxels away from the surface had inconsistent "
-                "signs (self-intersection, touching or nested surfaces): the winding number corrected {} "
-                "voxels",
-                orientation, pairs, corrected);
-        } else {
-            method = SignMethod::Winding;
-            result.signReason = fmt::format(
-                "closed manifold, but the pseudonormal sign was wrong over more than {:.0f} % of the grid "
-                "(self-intersecting or nested surfaces) -> winding",
-                100 * kRepairShare);
-        }
+        wave.swap(next);
     }
+    return repair;
+}
 
-    if (method == SignMethod::Pseudonormal) {
-        for (size_t i = 0; i < voxelCount; ++i) {
-            if (negative[i]) grid.distances[i] = -grid.distances[i];
-        }
-    } else {
-        makeSolver(method == SignMethod::Parity);
-        const auto xs = latticeAxis(grid.dims.x, kTopCell);
-        const auto ys = latticeAxis(grid.dims.y, kTopCell);
-        const auto zs = latticeAxis(grid.dims.z, kTopCell);
-        const size_t cx = std::max<size_t>(1, xs.size() - 1), cy = std::max<size_t>(1, ys.size() - 1),
-                     cz = std::max<size_t>(1, zs.size() - 1);
-        auto cellRange = [](const std::vector<uint32_t>& axis, size_t c, uint32_t& lo, uint32_t& hi) {
-            lo = axis[std::min(c, axis.size() - 1)];
-            hi = axis[std::min(c + 1, axis.size() - 1)];
-        };
-        parallelFor(
-            threads, cx * cy * cz,
-            [&](size_t cell) {
-                glm::uvec3 lo, hi;
-                cellRange(xs, cell % cx, lo.x, hi.x);
-                cellRange(ys, (cell / cx) % cy, lo.y, hi.y);
-                cellRange(zs, cell / (cx * cy), lo.z, hi.z);
-                solver->solveCell(lo, hi);
-            },
-            settings.progress ? std::function<void(double)>([&](double f) { signProgress(0.95 * f); })
-                              : std::function<void(double)>());
-        parallelFor(threads, grid.dims.z,
-                    [&](size_t kk) {
-                        const uint32_t k = static_cast<uint32_t>(kk);
-                        for (uint32_t j = 0; j < grid.dims.y; ++j) {
-                            for (uint32_t i = 0; i < grid.dims.x; ++i) {
-                                const size_t idx = grid.index(i, j, k);
-                                if (solver->inside(i, j, k)) grid.distances[idx] = -grid.distances[idx];
-                            }
+// The sign reason of the checked pseudonormal after its repair.
+std::string repairedSignReason(const std::string& orientation, const SignRepair& repair) {
+    if (repair.pairs == 0) return orientation + " -> pseudonormal";
+    if (!repair.tooMany) {
+        return fmt::format(
+            "{} -> pseudonormal; {} pairs of neighbouring voxels away from the surface had inconsistent "
+            "signs (self-intersection, touching or nested surfaces): the winding number corrected {} "
+            "voxels",
+            orientation, repair.pairs, repair.corrected);
+    }
+    return fmt::format(
+        "closed manifold, but the pseudonormal sign was wrong over more than {:.0f} % of the grid "
+        "(self-intersecting or nested surfaces) -> winding",
+        100 * kRepairShare);
+}
+
+void applyPseudonormalSigns(SdfGrid& grid, const std::vector<uint8_t>& negative) {
+    const size_t voxelCount = grid.distances.size();
+    for (size_t i = 0; i < voxelCount; ++i) {
+        if (negative[i]) grid.distances[i] = -grid.distances[i];
+    }
+}
+
+// Signs the grid by the winding number (or parity) with SignSolver's cell subdivision over
+// threads (see the top of this file); returns the number of evaluations.
+uint64_t applyWindingSigns(SdfGrid& grid, const glm::dvec3& originLocal, const CleanMesh& clean, bool parity,
+                           uint32_t threads, const std::function<void(double)>& progress) {
+    const WindingNumber winding(clean.positions,
+                                clean.separateWinding ? clean.windingTriangles : clean.triangles);
+    SignSolver solver(grid, originLocal, winding, parity);
+    const auto xs = latticeAxis(grid.dims.x, kTopCell);
+    const auto ys = latticeAxis(grid.dims.y, kTopCell);
+    const auto zs = latticeAxis(grid.dims.z, kTopCell);
+    const size_t cx = std::max<size_t>(1, xs.size() - 1), cy = std::max<size_t>(1, ys.size() - 1),
+                 cz = std::max<size_t>(1, zs.size() - 1);
+    auto cellRange = [](const std::vector<uint32_t>& axis, size_t c, uint32_t& lo, uint32_t& hi) {
+        lo = axis[std::min(c, axis.size() - 1)];
+        hi = axis[std::min(c + 1, axis.size() - 1)];
+    };
+    parallelFor(
+        threads, cx * cy * cz,
+        [&](size_t cell) {
+            glm::uvec3 lo, hi;
+            cellRange(xs, cell % cx, lo.x, hi.x);
+            cellRange(ys, (cell / cx) % cy, lo.y, hi.y);
+            cellRange(zs, cell / (cx * cy), lo.z, hi.z);
+            solver.solveCell(lo, hi);
+        },
+        progress);
+    parallelFor(threads, grid.dims.z,
+                [&](size_t kk) {
+                    const uint32_t k = static_cast<uint32_t>(kk);
+                    for (uint32_t j = 0; j < grid.dims.y; ++j) {
+                        for (uint32_t i = 0; i < grid.dims.x; ++i) {
+                            const size_t idx = grid.index(i, j, k);
+                            if (solver.inside(i, j, k)) grid.distances[idx] = -grid.distances[idx];
                         }
-                    },
-                    {});
-    }
-    result.signUsed = method;
-    result.windingEvaluations = repairEvaluations + (solver ? solver->evaluations() : 0);
-    result.timings.signMs = msSince(t0);
+                    }
+                },
+                {});
+    return solver.evaluations();
+}
 
-    // Back to the mesh's units (the range check of placeGrid keeps every distance a finite float).
-    grid.voxelSize = placement.voxelSize;
+// Back to the mesh's units (the range check of placeGrid keeps every distance a finite float),
+// with the distance range.
+void toMeshUnits(BakeResult& result, double voxelSize, double fromUnit) {
+    SdfGrid& grid = result.grid;
+    grid.voxelSize = voxelSize;
     float lo = INFINITY, hi = -INFINITY;
     for (float& d : grid.distances) {
         d = static_cast<float>(double(d) * fromUnit);
@@ -741,9 +758,81 @@ void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeRe
     }
     result.minDistance = lo;
     result.maxDistance = hi;
+}
+
+void bakeImpl(const assets::MeshData& mesh, const BakeSettings& settings, BakeResult& result) {
+    const Clock::time_point start = Clock::now();
+    const uint32_t threads =
+        settings.threads ? settings.threads : std::max(1u, std::thread::hardware_concurrency());
+    CleanMesh clean;
+    if (!cleanMesh(mesh, clean, result.error, threads)) {
+        result.diagnostics = clean.diagnostics;
+        return;
+    }
+    result.diagnostics = clean.diagnostics;
+    result.timings.cleanupMs = msSince(start);
+    if (clean.triangles.empty()) {
+        result.error = fmt::format("mesh has no non-degenerate triangles ({} degenerate removed)",
+                                   clean.diagnostics.degenerateTrianglesRemoved);
+        return;
+    }
+
+    Placement placement;
+    if (!placeGrid(clean.diagnostics, settings, placement, result.error)) return;
+
+    const MeshDiagnostics& diag = clean.diagnostics;
+    const glm::dvec3 extent = diag.boundsMax - diag.boundsMin;
+    const UnitScale scale = unitScale(extent);
+    for (glm::dvec3& p : clean.positions) p *= scale.toUnit;
+
+    const std::string orientation = orientMesh(clean, settings, result);
+    const SignChoice choice = chooseSignMethod(diag, settings.sign, orientation, result.signReason);
+    SignMethod method = choice.method;
+    const BakeProgress progress(
+        settings, method == SignMethod::Pseudonormal ? (choice.repairPseudonormal ? 0.97 : 1.0) : 0.6);
+
+    Clock::time_point t0 = Clock::now();
+    TriangleBvh bvh;
+    bvh.build(clean.positions, clean.triangles, threads);
+    const Pseudonormals pseudonormals(clean);
+    const bool needPseudonormals = method == SignMethod::Pseudonormal;
+    result.timings.bvhMs = msSince(t0);
+
+    SdfGrid& grid = result.grid;  // normalised voxel size and distances until the end
+    const glm::dvec3 originLocal = allocateGrid(grid, placement, clean.center, scale.toUnit);
+    std::vector<uint8_t> negative;  // pseudonormal signs
+    if (needPseudonormals) resizeHuge(negative, grid.distances.size(), uint8_t(0));
+
+    t0 = Clock::now();
+    progress.report(0, "distance");
+    computeDistances(grid, originLocal, bvh, pseudonormals, needPseudonormals ? &negative : nullptr, threads,
+                     progress.distance());
+    result.timings.distanceMs = msSince(t0);
+
+    t0 = Clock::now();
+    uint64_t windingEvaluations = 0;
+    if (choice.repairPseudonormal) {
+        const float separated =
+            static_cast<float>(grid.voxelSize * (1 + 1e-4) + 1e-6 * glm::length(extent * scale.toUnit));
+        const SignRepair repair =
+            repairPseudonormalSigns(grid, originLocal, bvh, separated, negative, threads);
+        windingEvaluations = repair.evaluations;
+        result.signReason = repairedSignReason(orientation, repair);
+        if (repair.tooMany) method = SignMethod::Winding;
+    }
+    if (method == SignMethod::Pseudonormal) {
+        applyPseudonormalSigns(grid, negative);
+    } else {
+        windingEvaluations += applyWindingSigns(grid, originLocal, clean, method == SignMethod::Parity,
+                                                threads, progress.sign(0.95));
+    }
+    result.signUsed = method;
+    result.windingEvaluations = windingEvaluations;
+    result.timings.signMs = msSince(t0);
+
+    toMeshUnits(result, placement.voxelSize, scale.fromUnit);
     result.ok = true;
-    report(1, "sign");
-    return;
+    progress.report(1, "sign");
 }
 
 }  // namespace

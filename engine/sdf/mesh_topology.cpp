@@ -114,12 +114,10 @@ bool cleanMesh(const assets::MeshData& mesh, CleanMesh& out, std::string& error)
 
 namespace {
 
-bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& error, uint32_t threads) {
-    out = CleanMesh{};
-    MeshDiagnostics& diag = out.diagnostics;
+// The input checks: whole triangles, not empty, vertex ids that fit, finite coordinates and
+// indices in range.
+bool validateMesh(const assets::MeshData& mesh, std::string& error) {
     const size_t vertexCount = mesh.positions.size();
-    diag.inputVertices = vertexCount;
-    diag.inputTriangles = mesh.indices.size() / 3;
     if (mesh.indices.size() % 3 != 0) {
         error = fmt::format("mesh index count {} is not a multiple of 3", mesh.indices.size());
         return false;
@@ -140,7 +138,6 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             return false;
         }
     }
-    const size_t triangleCount = mesh.indices.size() / 3;
     for (size_t i = 0; i < mesh.indices.size(); ++i) {
         if (mesh.indices[i] >= vertexCount) {
             error = fmt::format("triangle {} references vertex {} but the mesh has {} vertices", i / 3,
@@ -148,13 +145,26 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             return false;
         }
     }
+    return true;
+}
 
-    // Merge exactly coincident vertices among those referenced by a triangle.
-    std::vector<uint32_t> remap;
+struct MergedVertices {
+    std::vector<uint32_t> remap;         // input vertex -> unique id (kNone: not referenced)
+    std::vector<uint32_t> uniqueSource;  // unique id -> first input vertex
+    size_t referenced = 0;               // input vertices referenced by a triangle
+};
+
+// Merges exactly coincident vertices among those referenced by a triangle.
+MergedVertices mergeCoincidentVertices(const assets::MeshData& mesh) {
+    const size_t vertexCount = mesh.positions.size();
+    MergedVertices merged;
+    std::vector<uint32_t>& remap = merged.remap;
+    std::vector<uint32_t>& uniqueSource = merged.uniqueSource;
     resizeHuge(remap, vertexCount, kNone);
     for (uint32_t index : mesh.indices) remap[index] = 0;
     size_t referenced = 0;
     for (uint32_t r : remap) referenced += r == 0 ? 1 : 0;
+    merged.referenced = referenced;
     // Open addressing; an entry holds the upper hash bits above the unique id, so positions are
     // only compared when those agree.
     size_t tableSize = 16;
@@ -162,7 +172,6 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
     constexpr uint64_t kEmpty = UINT64_MAX;
     std::vector<uint64_t> table;
     resizeHuge(table, tableSize, kEmpty);
-    std::vector<uint32_t> uniqueSource;  // unique id -> first input vertex
     reserveHuge(uniqueSource, referenced);
     for (size_t v = 0; v < vertexCount; ++v) {
         if (remap[v] == kNone) continue;
@@ -187,15 +196,16 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             slot = (slot + 1) & (tableSize - 1);
         }
     }
-    diag.duplicateVerticesMerged = referenced - uniqueSource.size();
-    table = {};
+    return merged;
+}
 
-    // The remaining steps run in `parts` threads: triangle ranges for the degenerate test, vertex
-    // ranges (rows) for the rings, duplicates and edges. Results do not depend on the split.
-    const size_t uniqueCount = uniqueSource.size();
-    const uint32_t parts = partsFor(threads, triangleCount);
-
-    // Degenerate triangles: repeated (merged) vertex or zero area.
+// The triangles over unique ids, in input order, without the degenerate ones (a repeated (merged)
+// vertex or zero area), counted in diag.degenerateTrianglesRemoved.
+std::vector<glm::uvec3> dropDegenerateTriangles(const assets::MeshData& mesh, const MergedVertices& merged,
+                                                uint32_t parts, MeshDiagnostics& diag) {
+    const std::vector<uint32_t>& remap = merged.remap;
+    const std::vector<uint32_t>& uniqueSource = merged.uniqueSource;
+    const size_t triangleCount = mesh.indices.size() / 3;
     std::vector<uint8_t> keep;
     resizeHuge(keep, triangleCount, uint8_t(0));
     std::vector<size_t> kept(parts + 1, 0);
@@ -236,12 +246,19 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             }
         }
     });
-    keep = {};
-    remap = {};
+    return tris;
+}
 
-    // Rings (rows of triangles around each vertex, with the corners after the vertex). Each part
-    // owns a range of vertices and scans all triangles for their corners.
-    std::vector<uint32_t> ringStart;
+struct Rings {
+    std::vector<uint32_t> start;  // row of vertex v: entries[start[v] .. start[v + 1])
+    std::vector<RingEntry> entries;
+};
+
+// Rings (rows of triangles around each vertex, with the corners after the vertex). Each part
+// owns a range of vertices and scans all triangles for their corners.
+Rings buildRings(const std::vector<glm::uvec3>& tris, size_t uniqueCount, uint32_t parts) {
+    Rings rings;
+    std::vector<uint32_t>& ringStart = rings.start;
     resizeHuge(ringStart, uniqueCount + 1, 0u);
     forParts(parts, uniqueCount, [&](uint32_t, size_t vb, size_t ve) {
         for (const glm::uvec3& t : tris) {
@@ -251,7 +268,7 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
         }
     });
     for (size_t v = 0; v < uniqueCount; ++v) ringStart[v + 1] += ringStart[v];
-    std::vector<RingEntry> ring;
+    std::vector<RingEntry>& ring = rings.entries;
     resizeHuge(ring, tris.size() * 3);
     forParts(parts, uniqueCount, [&](uint32_t, size_t vb, size_t ve) {
         std::vector<uint32_t> fill(ringStart.begin() + vb, ringStart.begin() + ve);
@@ -264,23 +281,26 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             }
         }
     });
+    return rings;
+}
 
-    // Duplicate triangles (same vertex set, either orientation): keep the first. Found in the row
-    // of each triangle's smallest vertex, where its other two corners are (next, prev): equal
-    // pairs are equal orientations, swapped pairs flipped ones. A triangle is decided in exactly
-    // one row, so parts never write the same flag.
-    std::vector<uint8_t> duplicate;
-    resizeHuge(duplicate, tris.size(), uint8_t(0));
-    struct PartCounts {
-        uint64_t duplicates = 0, opposite = 0, boundary = 0, nonManifold = 0, inconsistent = 0;
-        std::vector<std::pair<uint32_t, int>> netChanges;  // (first of a group, +1 / -1)
-    };
-    std::vector<PartCounts> counts(parts);
+// Per part (vertex range) of the topology analysis.
+struct PartCounts {
+    uint64_t duplicates = 0, opposite = 0, boundary = 0, nonManifold = 0, inconsistent = 0;
+    std::vector<std::pair<uint32_t, int>> netChanges;  // (first of a group, +1 / -1)
+};
+
+// Duplicate triangles (same vertex set, either orientation): keep the first. Found in the row of
+// each triangle's smallest vertex, where its other two corners are (next, prev): equal pairs are
+// equal orientations, swapped pairs flipped ones. A triangle is decided in exactly one row, so
+// parts never write the same flag.
+void findDuplicateTriangles(const Rings& rings, size_t uniqueCount, uint32_t parts,
+                            std::vector<uint8_t>& duplicate, std::vector<PartCounts>& counts) {
     forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
         PartCounts& c = counts[part];
         for (size_t v = vb; v < ve; ++v) {
-            const RingEntry* row = ring.data() + ringStart[v];
-            const uint32_t n = ringStart[v + 1] - ringStart[v];
+            const RingEntry* row = rings.entries.data() + rings.start[v];
+            const uint32_t n = rings.start[v + 1] - rings.start[v];
             for (uint32_t i = 0; i < n; ++i) {
                 const RingEntry& e = row[i];
                 if (e.next < v || e.prev < v) continue;  // v is not this triangle's smallest corner
@@ -298,9 +318,13 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             }
         }
     });
-    // Edge uses (all duplicates known now): for each vertex v, the edges to larger neighbours w
-    // with their direction; one use -> boundary, more than two -> non-manifold, two in the same
-    // direction -> inconsistently oriented.
+}
+
+// Edge uses (all duplicates known): for each vertex v, the edges to larger neighbours w with their
+// direction; one use -> boundary, more than two -> non-manifold, two in the same direction ->
+// inconsistently oriented.
+void countEdgeUses(const Rings& rings, size_t uniqueCount, uint32_t parts,
+                   const std::vector<uint8_t>& duplicate, std::vector<PartCounts>& counts) {
     forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
         PartCounts& c = counts[part];
         struct Use {
@@ -310,8 +334,8 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
         std::vector<Use> uses;
         for (size_t v = vb; v < ve; ++v) {
             uses.clear();
-            for (uint32_t r = ringStart[v]; r < ringStart[v + 1]; ++r) {
-                const RingEntry& e = ring[r];
+            for (uint32_t r = rings.start[v]; r < rings.start[v + 1]; ++r) {
+                const RingEntry& e = rings.entries[r];
                 if (duplicate[e.triangle]) continue;
                 if (e.next > v) uses.push_back(Use{e.next, true});
                 if (e.prev > v) uses.push_back(Use{e.prev, false});
@@ -329,44 +353,51 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
             }
         }
     });
-    std::vector<int32_t> net;  // per first triangle of a duplicate group: net copies
+}
+
+// Sums the part counts into diag; returns per first triangle of a duplicate group its net copies
+// (empty: no duplicates).
+std::vector<int32_t> sumPartCounts(const std::vector<PartCounts>& counts, size_t triangleCount,
+                                   MeshDiagnostics& diag) {
+    std::vector<int32_t> net;
     for (const PartCounts& c : counts) {
         diag.duplicateTrianglesRemoved += c.duplicates;
         diag.oppositeDuplicateTriangles += c.opposite;
         diag.boundaryEdges += c.boundary;
         diag.nonManifoldEdges += c.nonManifold;
         diag.inconsistentEdges += c.inconsistent;
-        if (!c.netChanges.empty() && net.empty()) net.assign(tris.size(), 1);
+        if (!c.netChanges.empty() && net.empty()) net.assign(triangleCount, 1);
         for (const auto& [first, change] : c.netChanges) net[first] += change;
     }
     diag.closedManifold = diag.boundaryEdges == 0 && diag.nonManifoldEdges == 0;
+    return net;
+}
 
-    // Winding triangles: only needed when some duplicate group's net orientation is not one copy
-    // of its first triangle.
-    bool windingDiffers = false;
-    for (size_t t = 0; t < net.size() && !windingDiffers; ++t) windingDiffers = net[t] != 1;
+struct VertexNumbering {
+    std::vector<uint32_t> compact;           // unique id -> output vertex (kNone: unused)
+    std::vector<uint32_t> newStart;          // output ring rows (used + 1 entries)
+    uint32_t used = 0;                       // vertices left
+    glm::dvec3 lo{INFINITY}, hi{-INFINITY};  // their bounds
+};
 
-    // Compaction: drop duplicates, renumber the used vertices (input order), move them to double
-    // coordinates relative to the bounding-box centre, and compact the rings alike.
-    std::vector<uint32_t> newTriangle;
-    resizeHuge(newTriangle, tris.size(), kNone);
-    uint32_t keptTriangles = 0;
-    for (size_t t = 0; t < tris.size(); ++t) {
-        if (!duplicate[t]) newTriangle[t] = keptTriangles++;
-    }
-    std::vector<uint32_t> compact;
-    resizeHuge(compact, uniqueCount, kNone);
+// Numbers the used vertices (non-empty rows once duplicates are dropped) in input order, with the
+// starts of their compacted rows and their bounds: per part counts, then offsets.
+VertexNumbering numberUsedVertices(const assets::MeshData& mesh, const std::vector<uint32_t>& uniqueSource,
+                                   const Rings& rings, const std::vector<uint8_t>& duplicate,
+                                   uint32_t parts) {
+    const size_t uniqueCount = uniqueSource.size();
+    VertexNumbering numbering;
+    resizeHuge(numbering.compact, uniqueCount, kNone);
     std::vector<uint32_t> rowSize;  // per unique vertex: triangles kept in its row
     resizeHuge(rowSize, uniqueCount, 0u);
     forParts(parts, uniqueCount, [&](uint32_t, size_t vb, size_t ve) {
         for (size_t u = vb; u < ve; ++u) {
             uint32_t n = 0;
-            for (uint32_t r = ringStart[u]; r < ringStart[u + 1]; ++r)
-                n += duplicate[ring[r].triangle] ? 0 : 1;
+            for (uint32_t r = rings.start[u]; r < rings.start[u + 1]; ++r)
+                n += duplicate[rings.entries[r].triangle] ? 0 : 1;
             rowSize[u] = n;
         }
     });
-    // Used vertices (non-empty rows) are numbered in order: per part counts, then offsets.
     std::vector<uint32_t> partUsed(parts + 1, 0), partRows(parts + 1, 0);
     std::vector<glm::dvec3> partLo(parts, glm::dvec3(INFINITY)), partHi(parts, glm::dvec3(-INFINITY));
     forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
@@ -382,51 +413,126 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
         partUsed[part + 1] = n;
         partRows[part + 1] = rows;
     });
-    glm::dvec3 lo(INFINITY), hi(-INFINITY);
     for (uint32_t part = 0; part < parts; ++part) {
         partUsed[part + 1] += partUsed[part];
         partRows[part + 1] += partRows[part];
-        lo = glm::min(lo, partLo[part]);
-        hi = glm::max(hi, partHi[part]);
+        numbering.lo = glm::min(numbering.lo, partLo[part]);
+        numbering.hi = glm::max(numbering.hi, partHi[part]);
     }
-    const uint32_t used = partUsed[parts];
-    std::vector<uint32_t> newStart;
-    resizeHuge(newStart, size_t(used) + 1, 0u);
+    numbering.used = partUsed[parts];
+    resizeHuge(numbering.newStart, size_t(numbering.used) + 1, 0u);
     forParts(parts, uniqueCount, [&](uint32_t part, size_t vb, size_t ve) {
         uint32_t id = partUsed[part], start = partRows[part];
         for (size_t u = vb; u < ve; ++u) {
             if (rowSize[u] == 0) continue;
-            compact[u] = id;
-            newStart[id++] = start;
+            numbering.compact[u] = id;
+            numbering.newStart[id++] = start;
             start += rowSize[u];
         }
     });
-    newStart[used] = partRows[parts];
-    out.separateWinding = windingDiffers;
-    if (windingDiffers) {
-        reserveHuge(out.windingTriangles, tris.size());
-        for (size_t t = 0; t < tris.size(); ++t) {
-            if (duplicate[t]) continue;
-            const int copies = net[t];
-            const glm::uvec3 c(compact[tris[t].x], compact[tris[t].y], compact[tris[t].z]);
-            for (int i = 0; i < std::abs(copies); ++i) {
-                out.windingTriangles.push_back(copies > 0 ? c : glm::uvec3(c.x, c.z, c.y));
+    numbering.newStart[numbering.used] = partRows[parts];
+    return numbering;
+}
+
+// The kept triangles, each repeated by its group's net copies (flipped when negative), over the
+// output vertices.
+std::vector<glm::uvec3> netWindingTriangles(const std::vector<glm::uvec3>& tris,
+                                            const std::vector<uint8_t>& duplicate,
+                                            const std::vector<int32_t>& net,
+                                            const std::vector<uint32_t>& compact) {
+    std::vector<glm::uvec3> winding;
+    reserveHuge(winding, tris.size());
+    for (size_t t = 0; t < tris.size(); ++t) {
+        if (duplicate[t]) continue;
+        const int copies = net[t];
+        const glm::uvec3 c(compact[tris[t].x], compact[tris[t].y], compact[tris[t].z]);
+        for (int i = 0; i < std::abs(copies); ++i)
+            winding.push_back(copies > 0 ? c : glm::uvec3(c.x, c.z, c.y));
+    }
+    return winding;
+}
+
+// out.positions: the used vertices in double coordinates relative to out.center.
+void placeVertices(const assets::MeshData& mesh, const std::vector<uint32_t>& uniqueSource,
+                   const VertexNumbering& numbering, uint32_t parts, CleanMesh& out) {
+    resizeHuge(out.positions, numbering.used);
+    forParts(parts, uniqueSource.size(), [&](uint32_t, size_t vb, size_t ve) {
+        for (size_t u = vb; u < ve; ++u) {
+            if (numbering.compact[u] != kNone) {
+                out.positions[numbering.compact[u]] =
+                    glm::dvec3(mesh.positions[uniqueSource[u]]) - out.center;
             }
         }
+    });
+}
+
+// Signed volume, summed in triangle order (the same for any thread count).
+double signedVolume(const CleanMesh& mesh) {
+    double volume = 0;
+    for (const glm::uvec3& t : mesh.triangles) {
+        volume += glm::dot(mesh.positions[t.x], glm::cross(mesh.positions[t.y], mesh.positions[t.z]));
     }
+    return volume / 6;
+}
+
+bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& error, uint32_t threads) {
+    out = CleanMesh{};
+    MeshDiagnostics& diag = out.diagnostics;
+    diag.inputVertices = mesh.positions.size();
+    diag.inputTriangles = mesh.indices.size() / 3;
+    if (!validateMesh(mesh, error)) return false;
+    const size_t triangleCount = mesh.indices.size() / 3;
+
+    MergedVertices merged = mergeCoincidentVertices(mesh);
+    diag.duplicateVerticesMerged = merged.referenced - merged.uniqueSource.size();
+
+    // The remaining steps run in `parts` threads: triangle ranges for the degenerate test, vertex
+    // ranges (rows) for the rings, duplicates and edges. Results do not depend on the split.
+    const std::vector<uint32_t>& uniqueSource = merged.uniqueSource;
+    const size_t uniqueCount = uniqueSource.size();
+    const uint32_t parts = partsFor(threads, triangleCount);
+
+    std::vector<glm::uvec3> tris = dropDegenerateTriangles(mesh, merged, parts, diag);
+    merged.remap = {};
+    Rings rings = buildRings(tris, uniqueCount, parts);
+
+    std::vector<uint8_t> duplicate;
+    resizeHuge(duplicate, tris.size(), uint8_t(0));
+    std::vector<PartCounts> counts(parts);
+    findDuplicateTriangles(rings, uniqueCount, parts, duplicate, counts);
+    countEdgeUses(rings, uniqueCount, parts, duplicate, counts);
+    const std::vector<int32_t> net = sumPartCounts(counts, tris.size(), diag);
+
+    // Winding triangles: only needed when some duplicate group's net orientation is not one copy
+    // of its first triangle.
+    bool windingDiffers = false;
+    for (size_t t = 0; t < net.size() && !windingDiffers; ++t) windingDiffers = net[t] != 1;
+
+    // Compaction: drop duplicates, renumber the used vertices (input order), move them to double
+    // coordinates relative to the bounding-box centre, and compact the rings alike.
+    std::vector<uint32_t> newTriangle;
+    resizeHuge(newTriangle, tris.size(), kNone);
+    uint32_t keptTriangles = 0;
+    for (size_t t = 0; t < tris.size(); ++t) {
+        if (!duplicate[t]) newTriangle[t] = keptTriangles++;
+    }
+    VertexNumbering numbering = numberUsedVertices(mesh, uniqueSource, rings, duplicate, parts);
+    const std::vector<uint32_t>& compact = numbering.compact;
+    out.separateWinding = windingDiffers;
+    if (windingDiffers) out.windingTriangles = netWindingTriangles(tris, duplicate, net, compact);
     resizeHuge(out.ringTriangles, size_t(keptTriangles) * 3, 0u);
     forParts(parts, uniqueCount, [&](uint32_t, size_t vb, size_t ve) {
         for (size_t u = vb; u < ve; ++u) {
             if (compact[u] == kNone) continue;
-            uint32_t w = newStart[compact[u]];
-            for (uint32_t r = ringStart[u]; r < ringStart[u + 1]; ++r) {
-                if (!duplicate[ring[r].triangle]) out.ringTriangles[w++] = newTriangle[ring[r].triangle];
+            uint32_t w = numbering.newStart[compact[u]];
+            for (uint32_t r = rings.start[u]; r < rings.start[u + 1]; ++r) {
+                const uint32_t t = rings.entries[r].triangle;
+                if (!duplicate[t]) out.ringTriangles[w++] = newTriangle[t];
             }
         }
     });
-    out.ringStart = std::move(newStart);
-    ring = {};
-    ringStart = {};
+    out.ringStart = std::move(numbering.newStart);
+    rings = {};
     for (size_t t = 0; t < tris.size(); ++t) {  // in place: newTriangle[t] <= t
         if (!duplicate[t]) {
             tris[newTriangle[t]] = glm::uvec3(compact[tris[t].x], compact[tris[t].y], compact[tris[t].z]);
@@ -436,28 +542,16 @@ bool cleanMeshImpl(const assets::MeshData& mesh, CleanMesh& out, std::string& er
     out.triangles = std::move(tris);
 
     diag.triangles = keptTriangles;
-    diag.vertices = used;
+    diag.vertices = numbering.used;
     if (keptTriangles == 0) {
         diag.boundsMin = diag.boundsMax = glm::dvec3(0);
         return true;
     }
-    diag.boundsMin = lo;
-    diag.boundsMax = hi;
-    out.center = 0.5 * (lo + hi);
-    resizeHuge(out.positions, used);
-    forParts(parts, uniqueCount, [&](uint32_t, size_t vb, size_t ve) {
-        for (size_t u = vb; u < ve; ++u) {
-            if (compact[u] != kNone) {
-                out.positions[compact[u]] = glm::dvec3(mesh.positions[uniqueSource[u]]) - out.center;
-            }
-        }
-    });
-    // Signed volume, summed in triangle order (the same for any thread count).
-    double volume = 0;
-    for (const glm::uvec3& t : out.triangles) {
-        volume += glm::dot(out.positions[t.x], glm::cross(out.positions[t.y], out.positions[t.z]));
-    }
-    diag.signedVolume = volume / 6;
+    diag.boundsMin = numbering.lo;
+    diag.boundsMax = numbering.hi;
+    out.center = 0.5 * (numbering.lo + numbering.hi);
+    placeVertices(mesh, uniqueSource, numbering, parts, out);
+    diag.signedVolume = signedVolume(out);
     diag.inwardOriented = diag.closedManifold && diag.inconsistentEdges == 0 && diag.signedVolume < 0;
     return true;
 }
