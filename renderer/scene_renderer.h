@@ -35,7 +35,7 @@
 #include "engine/image/image.h"
 #include "engine/scene/scene.h"
 #include "renderer/features/debug_view.h"
-#include "renderer/features/mesh_gbuffer.h"
+#include "renderer/core/gbuffer_encoding.h"
 #include "renderer/frame_graph/frame_graph.h"
 #include "rhi/device.h"
 

@@ -9,9 +9,6 @@
 #include <cstdint>
 #include <vector>
 
-#include <glm/vec2.hpp>
-#include <glm/vec3.hpp>
-
 #include "renderer/features/frame_context.h"
 
 namespace penumbra::render {
@@ -28,10 +25,5 @@ struct MeshDraw {
 // Adds the pass (clears and writes every GBuffer target). Returns the bytes of its transient
 // depth buffer.
 uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws);
-
-// The octahedral normal encoding of renderer/shaders/gbuffer.glsl, in C++ (tests, tools):
-// unit vector <-> [-1, 1]^2.
-glm::vec2 octEncode(glm::vec3 n);
-glm::vec3 octDecode(glm::vec2 e);
 
 }  // namespace penumbra::render

@@ -4,7 +4,7 @@
 //   material  RGBA8_UNORM  r, g = 16-bit material index (low byte, high byte) / 255,
 //                          b = shadow, a = AO
 //   velocity  RG16_FLOAT   pixels moved since the previous frame (current - previous)
-// The C++ octEncode / octDecode (renderer/passes/gbuffer_mesh.cpp) are the same functions.
+// The C++ octEncode / octDecode (renderer/core/gbuffer_encoding.h) are the same functions.
 
 vec2 octSignNotZero(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
 
