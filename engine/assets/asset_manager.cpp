@@ -287,6 +287,10 @@ const char* assetKindName(AssetKind kind) {
             return "material";
         case AssetKind::Texture:
             return "texture";
+        case AssetKind::ShapeProgram:
+            return "shapeProgram";
+        case AssetKind::SdfField:
+            return "sdfField";
         case AssetKind::Count:
             break;
     }
@@ -724,6 +728,64 @@ const TextureData* AssetManager::texture(AssetId id) const {
     return entry && entry->info.kind == AssetKind::Texture
                ? static_cast<const TextureData*>(entry->data.get())
                : nullptr;
+}
+
+const sdf::ShapeProgram* AssetManager::shapeProgram(AssetId id) const {
+    const Entry* entry = find(id);
+    return entry && entry->info.kind == AssetKind::ShapeProgram
+               ? static_cast<const sdf::ShapeProgram*>(entry->data.get())
+               : nullptr;
+}
+
+const sdf::PsdfAsset* AssetManager::sdfField(AssetId id) const {
+    const Entry* entry = find(id);
+    return entry && entry->info.kind == AssetKind::SdfField
+               ? static_cast<const sdf::PsdfAsset*>(entry->data.get())
+               : nullptr;
+}
+
+AssetId AssetManager::addShapeProgram(std::string_view key, sdf::ShapeProgram program, std::string& error) {
+    const AssetId id = stableId(AssetKind::ShapeProgram, key);
+    if (const Entry* existing = find(id);
+        existing && existing->info.kind == AssetKind::ShapeProgram && existing->info.key == key) {
+        ++find(id)->info.refCount;
+        return id;
+    }
+    if (!sdf::validateShapeProgram(program.records, error)) {
+        error = fmt::format("shape program '{}': {}", key, error);
+        return 0;
+    }
+    const uint64_t bytes = program.records.size() * sizeof(sdf::ShapeInstruction);
+    const AssetId result = insert(AssetKind::ShapeProgram, key, {},
+                                  std::make_shared<sdf::ShapeProgram>(std::move(program)), bytes);
+    if (result == 0) error = fmt::format("shape program '{}': asset id collision", key);
+    return result;
+}
+
+std::string AssetManager::shapeProgramKey(const sdf::ShapeProgram& program) {
+    return "shapes:" +
+           contentHash(program.records.data(), program.records.size() * sizeof(sdf::ShapeInstruction));
+}
+
+AssetId AssetManager::loadPsdf(const std::string& path, std::string& error) {
+    detail::FileBytes bytes;
+    if (!detail::readWholeFile(path, uint64_t(1) << 33, bytes, error))
+        return 0;  // .psdf limit: 2^30 voxels of 4 bytes
+    const std::string key = fmt::format("file:{}", contentHash(bytes.data(), bytes.size()));
+    const AssetId id = stableId(AssetKind::SdfField, key);
+    if (Entry* existing = find(id);
+        existing && existing->info.kind == AssetKind::SdfField && existing->info.key == key) {
+        ++existing->info.refCount;
+        return id;
+    }
+    auto field = std::make_shared<sdf::PsdfAsset>();
+    if (!sdf::decodePsdf(reinterpret_cast<const uint8_t*>(bytes.data()), bytes.size(), path, *field, error)) {
+        return 0;
+    }
+    const uint64_t size = field->grid.distances.size() * sizeof(float);
+    const AssetId result = insert(AssetKind::SdfField, key, path, std::move(field), size);
+    if (result == 0) error = fmt::format("{}: asset id collision", path);
+    return result;
 }
 
 bool AssetManager::contains(AssetId id) const { return find(id) != nullptr; }

@@ -30,12 +30,15 @@
 #include "engine/assets/mesh.h"
 #include "engine/assets/texture.h"
 #include "engine/ecs/components.h"
+#include "engine/sdf/psdf.h"
+#include "engine/sdf/shape_program.h"
 
 namespace penumbra::assets {
 
 using AssetId = ecs::AssetId;
 
-enum class AssetKind : uint8_t { Mesh, Material, Texture, Count };
+// ShapeProgram: compiled analytic shapes (engine/sdf/shape_program.h); SdfField: a .psdf grid.
+enum class AssetKind : uint8_t { Mesh, Material, Texture, ShapeProgram, SdfField, Count };
 const char* assetKindName(AssetKind kind);
 
 struct AssetManagerDesc {
@@ -76,6 +79,8 @@ public:
     AssetId loadMesh(const std::string& path, std::string& error);
     // A PNG or JPEG texture as RGBA8 (see texture.h); `srgb` marks colour data.
     AssetId loadTexture(const std::string& path, bool srgb, std::string& error);
+    // A .psdf signed-distance field, fully validated (sdf::readPsdf), keyed by its content hash.
+    AssetId loadPsdf(const std::string& path, std::string& error);
 
     // ---- in-memory assets ------------------------------------------------------------------
     // Meshes are validated (indices in range, multiple of 3, finite positions, attribute counts);
@@ -83,6 +88,9 @@ public:
     AssetId addMesh(std::string_view key, MeshData mesh, std::string& error);
     AssetId addMaterial(std::string_view key, const ecs::Material& material);
     AssetId addTexture(std::string_view key, TextureData texture, std::string& error);
+    // Checked with sdf::validateShapeProgram; 0 with `error` if invalid. shapeProgramKey() gives
+    // the content key, so identical programs share one asset (instancing).
+    AssetId addShapeProgram(std::string_view key, sdf::ShapeProgram program, std::string& error);
 
     // ---- references ----------------------------------------------------------------------
     bool retain(AssetId id);              // false for an unknown id
@@ -93,6 +101,8 @@ public:
     const MeshData* mesh(AssetId id) const;
     const ecs::Material* material(AssetId id) const;
     const TextureData* texture(AssetId id) const;
+    const sdf::ShapeProgram* shapeProgram(AssetId id) const;
+    const sdf::PsdfAsset* sdfField(AssetId id) const;
     bool contains(AssetId id) const;
     const AssetInfo* info(AssetId id) const;
 
@@ -111,6 +121,8 @@ public:
     static std::string contentHash(const void* data, size_t size);
     // The id for (kind, key): FNV-1a 64 of "<kind>:<key>", never 0.
     static AssetId stableId(AssetKind kind, std::string_view key);
+    // "shapes:<content hash of the records>".
+    static std::string shapeProgramKey(const sdf::ShapeProgram& program);
 
 private:
     struct Entry;

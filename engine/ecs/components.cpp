@@ -27,93 +27,20 @@ glm::vec3 Transform::worldForward() const {
     return len > 0.0f ? f / len : glm::vec3(0.0f, 0.0f, -1.0f);
 }
 
-// ---- SDF primitives -----------------------------------------------------------------------------
+// ---- SDF objects -------------------------------------------------------------------------------
 
-SdfPrimitive SdfPrimitive::sphere(float radius) {
-    SdfPrimitive p;
-    p.shape = SdfShape::Sphere;
-    p.params = glm::vec4(radius, 0.0f, 0.0f, 0.0f);
-    return p;
-}
-
-SdfPrimitive SdfPrimitive::box(glm::vec3 halfExtents, float rounding) {
-    SdfPrimitive p;
-    p.shape = SdfShape::Box;
-    p.params = glm::vec4(halfExtents, rounding);
-    return p;
-}
-
-SdfPrimitive SdfPrimitive::plane(glm::vec3 normal, float offset) {
-    SdfPrimitive p;
-    p.shape = SdfShape::Plane;
-    const float len = glm::length(normal);
-    p.params = glm::vec4(len > 0.0f ? normal / len : glm::vec3(0.0f, 1.0f, 0.0f), offset);
-    return p;
-}
-
-SdfPrimitive SdfPrimitive::capsule(float radius, float halfLength) {
-    SdfPrimitive p;
-    p.shape = SdfShape::Capsule;
-    p.params = glm::vec4(radius, halfLength, 0.0f, 0.0f);
-    return p;
-}
-
-SdfPrimitive SdfPrimitive::torus(float majorRadius, float minorRadius) {
-    SdfPrimitive p;
-    p.shape = SdfShape::Torus;
-    p.params = glm::vec4(majorRadius, minorRadius, 0.0f, 0.0f);
-    return p;
-}
-
-float SdfPrimitive::distance(glm::vec3 p) const {
-    switch (shape) {
-        case SdfShape::Sphere:
-            return glm::length(p) - params.x;
-        case SdfShape::Box: {
-            const float r = params.w;
-            const glm::vec3 q = glm::abs(p) - (glm::vec3(params) - glm::vec3(r));
-            const float outside = glm::length(glm::max(q, glm::vec3(0.0f)));
-            const float inside = std::min(std::max(q.x, std::max(q.y, q.z)), 0.0f);
-            return outside + inside - r;
-        }
-        case SdfShape::Plane:
-            return glm::dot(p, glm::vec3(params)) - params.w;
-        case SdfShape::Capsule: {
-            glm::vec3 q = p;
-            q.y -= std::clamp(q.y, -params.y, params.y);
-            return glm::length(q) - params.x;
-        }
-        case SdfShape::Torus: {
-            const float ring = std::sqrt(p.x * p.x + p.z * p.z) - params.x;
-            return std::sqrt(ring * ring + p.y * p.y) - params.y;
-        }
+const char* sdfSourceName(SdfSource s) {
+    switch (s) {
+        case SdfSource::None:
+            return "none";
+        case SdfSource::Shapes:
+            return "shapes";
+        case SdfSource::Field:
+            return "field";
+        case SdfSource::MeshBake:
+            return "mesh";
     }
-    return 0.0f;
-}
-
-namespace {
-
-// Polynomial smooth minimum: equals min(a, b) when |a - b| >= k, never above it.
-float smoothMin(float a, float b, float k) {
-    const float h = std::clamp(0.5f + 0.5f * (b - a) / k, 0.0f, 1.0f);
-    return b + (a - b) * h - k * h * (1.0f - h);
-}
-
-float smoothMax(float a, float b, float k) { return -smoothMin(-a, -b, k); }
-
-}  // namespace
-
-float csgCombine(CsgOp op, float a, float b, float smoothness) {
-    const bool smooth = smoothness > 0.0f;
-    switch (op) {
-        case CsgOp::Union:
-            return smooth ? smoothMin(a, b, smoothness) : std::min(a, b);
-        case CsgOp::Subtract:
-            return smooth ? smoothMax(a, -b, smoothness) : std::max(a, -b);
-        case CsgOp::Intersect:
-            return smooth ? smoothMax(a, b, smoothness) : std::max(a, b);
-    }
-    return a;
+    return "unknown";
 }
 
 // ---- hierarchy ----------------------------------------------------------------------------------

@@ -56,44 +56,29 @@ struct MeshRenderer {
     bool castShadows = true;
 };
 
-// An object drawn from a signed-distance-field asset.
+// Where an SDF object's field comes from.
+enum class SdfSource : uint8_t {
+    None,      // nothing to draw
+    Shapes,    // `sdf` is a shape-program asset (analytic shapes, CSG, repetition; AssetKind::ShapeProgram)
+    Field,     // `sdf` is a .psdf field asset (AssetKind::SdfField)
+    MeshBake,  // `bakeMesh` is baked to a field on demand by the renderer, at `bakeResolution`
+};
+
+// An object drawn from a signed distance field, placed by the entity's Transform (translation,
+// rotation and uniform scale keep distances exact; the renderer makes non-uniform scale
+// conservative). Many entities may share one `sdf` asset (instancing).
 struct SdfRenderer {
-    AssetId sdf = 0;
+    AssetId sdf = 0;  // Shapes / Field: the asset; 0 for MeshBake and None
     AssetId material = 0;
     bool visible = true;
     bool castShadows = true;
+    SdfSource source = SdfSource::None;
+    std::string bakeMesh{};       // MeshBake: the mesh file (path resolved by the scene loader)
+    uint32_t bakeResolution = 0;  // MeshBake: voxels along the longest axis; 0 = automatic (FORMATS.md)
+    uint32_t maxSteps = 0;        // sphere-tracing step limit for this object; 0 = the renderer's setting
 };
 
-enum class SdfShape : uint8_t { Sphere, Box, Plane, Capsule, Torus };
-enum class CsgOp : uint8_t { Union, Subtract, Intersect };
-
-// An analytic SDF shape in the entity's local space. `op` says how it combines with the shapes
-// before it in the same object: result = op(previous, this), blended over `smoothness` units
-// (0 = hard edge).
-struct SdfPrimitive {
-    SdfShape shape = SdfShape::Sphere;
-    // Sphere:  x = radius
-    // Box:     xyz = half extents, w = edge rounding radius (inside the half extents)
-    // Plane:   xyz = unit normal, w = offset along it (surface: dot(p, n) = w, outside on the n side)
-    // Capsule: x = radius, y = half length of the core segment along local Y
-    // Torus:   x = major radius (ring in the local XZ plane), y = minor (tube) radius
-    glm::vec4 params{0.5f, 0.0f, 0.0f, 0.0f};
-    CsgOp op = CsgOp::Union;
-    float smoothness = 0.0f;
-
-    static SdfPrimitive sphere(float radius);
-    static SdfPrimitive box(glm::vec3 halfExtents, float rounding = 0.0f);
-    static SdfPrimitive plane(glm::vec3 normal, float offset);
-    static SdfPrimitive capsule(float radius, float halfLength);
-    static SdfPrimitive torus(float majorRadius, float minorRadius);
-
-    // Signed distance from a local-space point (negative inside). Exact for every shape.
-    float distance(glm::vec3 p) const;
-};
-
-// Combines the accumulated distance `a` with a shape's distance `b` (smooth when smoothness > 0;
-// the smooth variants never exceed the hard union and never fall below the hard intersection).
-float csgCombine(CsgOp op, float a, float b, float smoothness);
+const char* sdfSourceName(SdfSource s);  // "none", "shapes", "field", "mesh"
 
 enum class LightType : uint8_t { Directional, Point, Sphere };
 

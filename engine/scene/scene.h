@@ -87,7 +87,9 @@ void unloadScene(Scene& scene, assets::AssetManager& assets);
 // when `name` is empty. Null entity when there is none.
 ecs::Entity findCamera(const ecs::World& world, std::string_view name);
 
-// The current scene-format version written in "version" (docs/FORMATS.md).
-inline constexpr int kSceneFormatVersion = 1;
+// The current scene-format version written in "version" (docs/FORMATS.md); files of every version
+// from kMinSceneFormatVersion on load (version 2 added the `sdf` component).
+inline constexpr int kSceneFormatVersion = 2;
+inline constexpr int kMinSceneFormatVersion = 1;
 
 }  // namespace penumbra::scene

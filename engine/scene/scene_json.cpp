@@ -1,4 +1,5 @@
-// The JSON scene format, version 1 (docs/FORMATS.md, "Scene JSON (version 1)").
+// The JSON scene format, versions 1 and 2 (docs/FORMATS.md, "Scene JSON"). Version 2 adds the `sdf`
+// component (analytic shapes compiled to shape programs, .psdf fields, meshes to bake).
 //
 // Reading happens in three steps, each refusing bad input with "<file>: <json pointer>: <reason>":
 //  1. a scan of the raw text for the nesting depth (brackets outside strings), before any parsing;
@@ -26,6 +27,7 @@
 #include "engine/core/json_depth.h"
 #include "engine/core/log.h"
 #include "engine/scene/scene.h"
+#include "engine/sdf/shape_program.h"
 
 namespace penumbra::scene {
 namespace {
@@ -34,6 +36,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 constexpr uint32_t kMaxRenderDimension = 16384;
+constexpr uint32_t kMinBakeResolution = 8;
+constexpr uint32_t kMaxBakeResolution = 1024;
+constexpr uint32_t kMaxSdfSteps = 10000;
 
 // RFC 6901: '~' -> "~0", '/' -> "~1".
 std::string pointerToken(std::string_view key) {
@@ -423,6 +428,10 @@ private:
     bool parseTransform(const json& v, const std::string& ptr, ecs::Transform& t);
     bool parseMesh(const json& v, const std::string& ptr, ecs::MeshRenderer& out);
     bool parsePrimitive(const json& v, const std::string& ptr, assets::AssetId& out);
+    bool parseMaterialRef(const json& v, const std::string& ptr, assets::AssetId& out);
+    bool parseSdf(const json& v, const std::string& ptr, ecs::SdfRenderer& out);
+    bool parseShapeNode(const json& v, const std::string& ptr, bool leaf, sdf::ShapeNode& out);
+    bool parseShapes(const json& v, const std::string& ptr, bool leaf, assets::AssetId& out);
     bool parseCamera(const json& v, const std::string& ptr, ecs::Camera& out);
     bool parseLight(const json& v, const std::string& ptr, ecs::Light& out);
     bool parseSpin(const json& v, const std::string& ptr, Spin& out);
@@ -442,6 +451,7 @@ private:
     std::unordered_map<std::string, size_t> m_entityByName;
     std::vector<EntityRecord> m_entities;
     bool m_hasRenderCamera = false;
+    int64_t m_version = kSceneFormatVersion;
 };
 
 bool SceneParser::run(const json& root) {
@@ -510,10 +520,11 @@ bool SceneParser::parseVersion(const json& root) {
                                 "update penumbra to read it",
                                 version, kSceneFormatVersion));
     }
-    if (version != kSceneFormatVersion) {
-        return fail("/version", fmt::format("unsupported scene format version {} (expected {})", version,
-                                            kSceneFormatVersion));
+    if (version < kMinSceneFormatVersion) {
+        return fail("/version", fmt::format("unsupported scene format version {} (expected {} to {})",
+                                            version, kMinSceneFormatVersion, kSceneFormatVersion));
     }
+    m_version = version;
     return true;
 }
 
@@ -645,7 +656,7 @@ bool SceneParser::parseMaterial(const json& v, const std::string& ptr, ecs::Mate
 
 bool SceneParser::parseEntity(const json& v, const std::string& ptr, size_t index) {
     if (!object(v, ptr) ||
-        !checkKeys(v, ptr, {"name", "parent", "transform", "mesh", "camera", "light", "spin", "gltf"},
+        !checkKeys(v, ptr, {"name", "parent", "transform", "mesh", "sdf", "camera", "light", "spin", "gltf"},
                    "an entity")) {
         return false;
     }
@@ -679,6 +690,17 @@ bool SceneParser::parseEntity(const json& v, const std::string& ptr, size_t inde
         ecs::MeshRenderer mr;
         if (!parseMesh(*it, child(ptr, "mesh"), mr)) return false;
         world.add<ecs::MeshRenderer>(e, mr);
+    }
+    if (auto it = v.find("sdf"); it != v.end()) {
+        const std::string p = child(ptr, "sdf");
+        if (m_version < 2) {
+            return fail(
+                p, fmt::format("the sdf component needs scene format version 2 (this file is version {})",
+                               m_version));
+        }
+        ecs::SdfRenderer sr;
+        if (!parseSdf(*it, p, sr)) return false;
+        world.add<ecs::SdfRenderer>(e, std::move(sr));
     }
     if (auto it = v.find("camera"); it != v.end()) {
         ecs::Camera cam;
@@ -787,30 +809,285 @@ bool SceneParser::parseMesh(const json& v, const std::string& ptr, ecs::MeshRend
         if (!parsePrimitive(v["primitive"], child(ptr, "primitive"), out.mesh)) return false;
     }
     if (auto it = v.find("material"); it != v.end()) {
-        const std::string p = child(ptr, "material");
-        ecs::Material m;
-        if (it->is_string()) {
-            const std::string name = it->get<std::string>();
-            auto found = m_materials.find(name);
-            if (found == m_materials.end()) {
-                return fail(p, fmt::format("unknown material '{}' (not defined in /materials)", name));
-            }
-            m = found->second.material;
-        } else if (it->is_object()) {
-            if (!parseMaterial(*it, p, m)) return false;
-        } else {
-            return fail(p,
-                        fmt::format("expected a material name or a material object, got {}", typeName(*it)));
-        }
-        out.material = m_assets.addMaterial(materialKey(m), m);
-        if (out.material == 0) return fail(p, "the asset manager refused the material");
-        hold(out.material);
+        if (!parseMaterialRef(*it, child(ptr, "material"), out.material)) return false;
     }
     if (auto it = v.find("castShadows"); it != v.end()) {
         if (!boolean(*it, child(ptr, "castShadows"), out.castShadows)) return false;
     }
     if (auto it = v.find("visible"); it != v.end()) {
         if (!boolean(*it, child(ptr, "visible"), out.visible)) return false;
+    }
+    return true;
+}
+
+bool SceneParser::parseMaterialRef(const json& v, const std::string& p, assets::AssetId& out) {
+    ecs::Material m;
+    if (v.is_string()) {
+        const std::string name = v.get<std::string>();
+        auto found = m_materials.find(name);
+        if (found == m_materials.end()) {
+            return fail(p, fmt::format("unknown material '{}' (not defined in /materials)", name));
+        }
+        m = found->second.material;
+    } else if (v.is_object()) {
+        if (!parseMaterial(v, p, m)) return false;
+    } else {
+        return fail(p, fmt::format("expected a material name or a material object, got {}", typeName(v)));
+    }
+    out = m_assets.addMaterial(materialKey(m), m);
+    if (out == 0) return fail(p, "the asset manager refused the material");
+    hold(out);
+    return true;
+}
+
+bool SceneParser::parseSdf(const json& v, const std::string& ptr, ecs::SdfRenderer& out) {
+    if (!object(v, ptr) || !checkKeys(v, ptr,
+                                      {"shape", "csg", "psdf", "mesh", "resolution", "material",
+                                       "castShadows", "visible", "maxSteps"},
+                                      "an sdf component")) {
+        return false;
+    }
+    const char* sources[] = {"shape", "csg", "psdf", "mesh"};
+    std::string given;
+    for (const char* s : sources) {
+        if (!v.contains(s)) continue;
+        if (!given.empty()) {
+            return fail(child(ptr, s), fmt::format("give one of \"shape\", \"csg\", \"psdf\" or \"mesh\" "
+                                                   "(this component already has \"{}\")",
+                                                   given));
+        }
+        given = s;
+    }
+    if (given.empty()) {
+        return fail(ptr,
+                    "an sdf component needs \"shape\" (one analytic shape), \"csg\" (a tree of "
+                    "shapes), \"psdf\" (a .psdf file) or \"mesh\" (a mesh file to bake)");
+    }
+    if (v.contains("resolution") && given != "mesh") {
+        return fail(child(ptr, "resolution"),
+                    "\"resolution\" applies to \"mesh\" only (the bake resolution)");
+    }
+    const std::string p = child(ptr, given);
+    if (given == "shape" || given == "csg") {
+        out.source = ecs::SdfSource::Shapes;
+        if (!parseShapes(v[given], p, given == "shape", out.sdf)) return false;
+    } else if (given == "psdf") {
+        std::string relative, path, err;
+        if (!string(v[given], p, relative) || !existingFile(p, relative, ".psdf file", path)) return false;
+        out.source = ecs::SdfSource::Field;
+        out.sdf = m_assets.loadPsdf(path, err);
+        if (out.sdf == 0) return fail(p, err);
+        hold(out.sdf);
+    } else {
+        std::string relative;
+        if (!string(v[given], p, relative) || !existingFile(p, relative, "mesh file", out.bakeMesh))
+            return false;
+        const std::string ext = assets::detail::lowerExtension(out.bakeMesh);
+        if (ext != "ply" && ext != "obj" && ext != "gltf" && ext != "glb") {
+            return fail(p,
+                        fmt::format("unknown mesh format '.{}' (supported: .ply, .obj, .gltf, .glb)", ext));
+        }
+        out.source = ecs::SdfSource::MeshBake;
+        if (auto it = v.find("resolution"); it != v.end()) {
+            if (!count(*it, child(ptr, "resolution"), kMinBakeResolution, kMaxBakeResolution,
+                       out.bakeResolution)) {
+                return false;
+            }
+        }
+    }
+    if (auto it = v.find("material"); it != v.end()) {
+        if (!parseMaterialRef(*it, child(ptr, "material"), out.material)) return false;
+    }
+    if (auto it = v.find("castShadows"); it != v.end()) {
+        if (!boolean(*it, child(ptr, "castShadows"), out.castShadows)) return false;
+    }
+    if (auto it = v.find("visible"); it != v.end()) {
+        if (!boolean(*it, child(ptr, "visible"), out.visible)) return false;
+    }
+    if (auto it = v.find("maxSteps"); it != v.end()) {
+        if (!count(*it, child(ptr, "maxSteps"), 1, kMaxSdfSteps, out.maxSteps)) return false;
+    }
+    return true;
+}
+
+bool SceneParser::parseShapes(const json& v, const std::string& ptr, bool leaf, assets::AssetId& out) {
+    sdf::ShapeNode root;
+    if (!parseShapeNode(v, ptr, leaf, root)) return false;
+    sdf::ShapeProgram program;
+    std::string err;
+    if (!sdf::compileShapeProgram(root, program, err)) {
+        // The compiler names the node below the root as a JSON pointer ("/children/1: reason").
+        if (!err.empty() && err[0] == '/') {
+            const size_t colon = err.find(": ");
+            if (colon != std::string::npos) return fail(ptr + err.substr(0, colon), err.substr(colon + 2));
+        }
+        return fail(ptr, err);
+    }
+    const std::string key = assets::AssetManager::shapeProgramKey(program);
+    const assets::AssetId existing = assets::AssetManager::stableId(assets::AssetKind::ShapeProgram, key);
+    if (m_assets.refCount(existing) > 0 && m_assets.shapeProgram(existing) != nullptr) {
+        m_assets.retain(existing);  // an identical program is shared (instancing)
+        hold(existing);
+        out = existing;
+        return true;
+    }
+    out = m_assets.addShapeProgram(key, std::move(program), err);
+    if (out == 0) return fail(ptr, err);
+    hold(out);
+    return true;
+}
+
+bool SceneParser::parseShapeNode(const json& v, const std::string& ptr, bool leaf, sdf::ShapeNode& out) {
+    if (!object(v, ptr)) return false;
+    if (auto it = v.find("transform"); it != v.end()) {
+        const std::string p = child(ptr, "transform");
+        if (it->is_object()) {
+            if (auto s = it->find("scale"); s != it->end() && !s->is_number()) {
+                return fail(
+                    child(p, "scale"),
+                    fmt::format("a shape's scale is one number (uniform), got {}; non-uniform scale goes "
+                                "on the entity's transform",
+                                typeName(*s)));
+            }
+        }
+        ecs::Transform t;
+        if (!parseTransform(*it, p, t)) return false;
+        out.transform.translation = glm::dvec3(t.position);
+        out.transform.rotation = glm::dquat(t.rotation);
+        out.transform.scale = double(t.scale.x);
+    }
+    const bool isShape = v.contains("shape");
+    const bool isOp = v.contains("op");
+    if (isShape == isOp || (leaf && !isShape)) {
+        if (leaf)
+            return fail(ptr,
+                        "expected a shape node with \"shape\" (sphere, box, roundedBox, capsule, "
+                        "cylinder, torus, cone or plane)");
+        return fail(ptr, isShape ? "give either \"shape\" or \"op\", not both"
+                                 : "expected an operation node with \"op\" (union, subtract, intersect or "
+                                   "repeat) or a shape node with \"shape\"");
+    }
+    auto num = [&](std::string_view key, double& dst, bool required) {
+        auto it = v.find(key);
+        if (it == v.end()) return !required || fail(ptr, fmt::format("missing \"{}\"", key));
+        float f = 0.0f;
+        if (!number(*it, child(ptr, key), f)) return false;
+        dst = double(f);
+        return true;
+    };
+    if (isShape) {
+        std::string name;
+        if (!string(v["shape"], child(ptr, "shape"), name)) return false;
+        out.type = sdf::ShapeNode::Type::Shape;
+        if (!sdf::parseShapeKind(name, out.shape)) {
+            return fail(child(ptr, "shape"),
+                        fmt::format("unknown shape '{}' (expected sphere, box, roundedBox, "
+                                    "capsule, cylinder, torus, cone or plane)",
+                                    name));
+        }
+        const std::string what = fmt::format("a {} shape", name);
+        glm::dvec4& q = out.params;
+        switch (out.shape) {
+            case sdf::ShapeKind::Sphere:
+                return checkKeys(v, ptr, {"shape", "transform", "radius"}, what) && num("radius", q.x, true);
+            case sdf::ShapeKind::Box:
+            case sdf::ShapeKind::RoundedBox: {
+                const bool rounded = out.shape == sdf::ShapeKind::RoundedBox;
+                if (!(rounded ? checkKeys(v, ptr, {"shape", "transform", "halfExtents", "rounding"}, what)
+                              : checkKeys(v, ptr, {"shape", "transform", "halfExtents"}, what))) {
+                    return false;
+                }
+                auto it = v.find("halfExtents");
+                if (it == v.end()) return fail(ptr, "missing \"halfExtents\"");
+                glm::vec3 h(0.0f);
+                if (it->is_number()) {
+                    if (!number(*it, child(ptr, "halfExtents"), h.x)) return false;
+                    h = glm::vec3(h.x);
+                } else if (!vec3(*it, child(ptr, "halfExtents"), h)) {
+                    return false;
+                }
+                q = glm::dvec4(glm::dvec3(h), 0.0);
+                return !rounded || num("rounding", q.w, true);
+            }
+            case sdf::ShapeKind::Capsule:
+                return checkKeys(v, ptr, {"shape", "transform", "radius", "halfLength"}, what) &&
+                       num("radius", q.x, true) && num("halfLength", q.y, true);
+            case sdf::ShapeKind::Cylinder:
+                return checkKeys(v, ptr, {"shape", "transform", "radius", "halfHeight"}, what) &&
+                       num("radius", q.x, true) && num("halfHeight", q.y, true);
+            case sdf::ShapeKind::Torus:
+                return checkKeys(v, ptr, {"shape", "transform", "majorRadius", "minorRadius"}, what) &&
+                       num("majorRadius", q.x, true) && num("minorRadius", q.y, true);
+            case sdf::ShapeKind::Cone:
+                return checkKeys(v, ptr, {"shape", "transform", "bottomRadius", "topRadius", "halfHeight"},
+                                 what) &&
+                       num("bottomRadius", q.x, true) && num("topRadius", q.y, false) &&
+                       num("halfHeight", q.z, true);
+            case sdf::ShapeKind::Plane: {
+                if (!checkKeys(v, ptr, {"shape", "transform", "normal", "offset"}, what)) return false;
+                auto it = v.find("normal");
+                if (it == v.end()) return fail(ptr, "missing \"normal\"");
+                glm::vec3 n(0.0f);
+                if (!vec3(*it, child(ptr, "normal"), n)) return false;
+                q = glm::dvec4(glm::dvec3(n), 0.0);
+                return num("offset", q.w, false);
+            }
+        }
+        return false;
+    }
+    std::string opName;
+    if (!string(v["op"], child(ptr, "op"), opName)) return false;
+    const bool repeat = opName == "repeat";
+    if (!repeat && !sdf::parseCsgOp(opName, out.op)) {
+        return fail(
+            child(ptr, "op"),
+            fmt::format("unknown operation '{}' (expected union, subtract, intersect or repeat)", opName));
+    }
+    if (repeat ? !checkKeys(v, ptr, {"op", "transform", "spacing", "count", "children"}, "a repeat node")
+               : !checkKeys(v, ptr, {"op", "transform", "smoothRadius", "children"}, "an operation node")) {
+        return false;
+    }
+    auto kids = v.find("children");
+    if (kids == v.end()) return fail(ptr, "missing \"children\"");
+    const std::string kp = child(ptr, "children");
+    if (!kids->is_array())
+        return fail(kp, fmt::format("expected an array of nodes, got {}", typeName(*kids)));
+    if (repeat) {
+        out.type = sdf::ShapeNode::Type::Repeat;
+        if (kids->size() != 1)
+            return fail(kp, fmt::format("a repeat node has one child (got {})", kids->size()));
+        auto sp = v.find("spacing");
+        if (sp == v.end()) return fail(ptr, "missing \"spacing\"");
+        glm::vec3 spacing(0.0f);
+        if (!vec3(*sp, child(ptr, "spacing"), spacing)) return false;
+        out.spacing = glm::dvec3(spacing);
+        auto ct = v.find("count");
+        if (ct == v.end()) return fail(ptr, "missing \"count\"");
+        const std::string cp = child(ptr, "count");
+        if (!ct->is_array() || ct->size() != 3) {
+            return fail(cp,
+                        fmt::format("expected an array of 3 integers, got {}",
+                                    ct->is_array() ? fmt::format("{} elements", ct->size()) : typeName(*ct)));
+        }
+        for (size_t k = 0; k < 3; ++k) {
+            if (!count((*ct)[k], child(cp, k), 1, 1024, out.count[int(k)])) return false;
+        }
+    } else {
+        out.type = sdf::ShapeNode::Type::Csg;
+        if (kids->size() < 2) {
+            return fail(kp,
+                        fmt::format("a {} node needs at least two children (got {})", opName, kids->size()));
+        }
+        if (auto it = v.find("smoothRadius"); it != v.end()) {
+            const std::string p = child(ptr, "smoothRadius");
+            float k = 0.0f;
+            if (!number(*it, p, k) || !positive(p, k, "smoothRadius")) return false;
+            out.smoothRadius = double(k);
+        }
+    }
+    out.children.resize(kids->size());
+    for (size_t i = 0; i < kids->size(); ++i) {
+        if (!parseShapeNode((*kids)[i], child(kp, i), false, out.children[i])) return false;
     }
     return true;
 }

@@ -1,4 +1,4 @@
-// Engine components (defaults, SDF primitive distances and CSG) and the system Schedule.
+// Engine components (defaults) and the system Schedule. SDF shapes: tests/sdf/shape_program_test.cpp.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -21,68 +21,17 @@ TEST(EcsComponentsEngine, AllAttachToOneEntity) {
     world.add<Camera>(e)->name = "main";
     world.add<MeshRenderer>(e, AssetId(3), AssetId(4));
     world.add<SdfRenderer>(e, AssetId(5), AssetId(6));
-    world.add<SdfPrimitive>(e, SdfPrimitive::torus(1.0f, 0.25f));
     world.add<Light>(e)->type = LightType::Sphere;
     world.add<Material>(e)->roughness = 0.25f;
     EXPECT_EQ(world.get<Name>(e)->value, "thing");
     EXPECT_EQ(world.get<Camera>(e)->name, "main");
     EXPECT_EQ(world.get<MeshRenderer>(e)->material, 4u);
     EXPECT_TRUE(world.get<SdfRenderer>(e)->castShadows);
-    EXPECT_EQ(world.get<SdfPrimitive>(e)->shape, SdfShape::Torus);
+    EXPECT_EQ(world.get<SdfRenderer>(e)->source, SdfSource::None);
     EXPECT_EQ(world.get<Light>(e)->type, LightType::Sphere);
     EXPECT_EQ(world.get<Material>(e)->baseColorTexture, 0u);
     EXPECT_NEAR(world.get<Camera>(e)->fovY, 3.14159265f / 3.0f, 1e-6f);
     EXPECT_EQ((world.view<Transform, Camera, Light>().count()), 1u);
-}
-
-TEST(EcsSdfPrimitive, Distances) {
-    const SdfPrimitive s = SdfPrimitive::sphere(2.0f);
-    EXPECT_NEAR(s.distance({3, 0, 0}), 1.0f, 1e-6f);
-    EXPECT_NEAR(s.distance({0, 0, 0}), -2.0f, 1e-6f);
-
-    const SdfPrimitive b = SdfPrimitive::box({1, 2, 3});
-    EXPECT_NEAR(b.distance({2, 0, 0}), 1.0f, 1e-6f);
-    EXPECT_NEAR(b.distance({0, 0, 0}), -1.0f, 1e-6f);
-    EXPECT_NEAR(b.distance({2, 3, 0}), std::sqrt(2.0f), 1e-6f);  // off the edge
-
-    const SdfPrimitive rb = SdfPrimitive::box({1, 1, 1}, 0.25f);
-    EXPECT_NEAR(rb.distance({2, 0, 0}), 1.0f, 1e-6f);
-    // Rounded corner: centre of the corner sphere at (0.75, 0.75, 0.75), radius 0.25.
-    const glm::vec3 corner(2, 2, 2);
-    EXPECT_NEAR(rb.distance(corner), glm::length(corner - glm::vec3(0.75f)) - 0.25f, 1e-6f);
-
-    const SdfPrimitive p = SdfPrimitive::plane({0, 2, 0}, 1.0f);  // normalised to +Y, y = 1
-    EXPECT_NEAR(p.distance({5, 3, -2}), 2.0f, 1e-6f);
-    EXPECT_NEAR(p.distance({0, 0, 0}), -1.0f, 1e-6f);
-
-    const SdfPrimitive c = SdfPrimitive::capsule(0.5f, 1.0f);
-    EXPECT_NEAR(c.distance({1, 0.5f, 0}), 0.5f, 1e-6f);
-    EXPECT_NEAR(c.distance({0, 3, 0}), 1.5f, 1e-6f);
-
-    const SdfPrimitive t = SdfPrimitive::torus(2.0f, 0.5f);
-    EXPECT_NEAR(t.distance({2, 0, 0}), -0.5f, 1e-6f);
-    EXPECT_NEAR(t.distance({0, 0, 0}), 1.5f, 1e-6f);
-    EXPECT_NEAR(t.distance({0, 1, 2}), 0.5f, 1e-6f);
-}
-
-TEST(EcsSdfPrimitive, CsgCombine) {
-    EXPECT_EQ(csgCombine(CsgOp::Union, 1.0f, 2.0f, 0.0f), 1.0f);
-    EXPECT_EQ(csgCombine(CsgOp::Intersect, 1.0f, 2.0f, 0.0f), 2.0f);
-    EXPECT_EQ(csgCombine(CsgOp::Subtract, 1.0f, 2.0f, 0.0f), 1.0f);
-    EXPECT_EQ(csgCombine(CsgOp::Subtract, 1.0f, -3.0f, 0.0f), 3.0f);
-    // Smooth variants: bounded by the hard ones, equal to them when far apart.
-    for (float a = -2.0f; a <= 2.0f; a += 0.125f) {
-        for (float b = -2.0f; b <= 2.0f; b += 0.125f) {
-            const float k = 0.5f;
-            EXPECT_LE(csgCombine(CsgOp::Union, a, b, k), std::min(a, b) + 1e-6f);
-            EXPECT_GE(csgCombine(CsgOp::Intersect, a, b, k), std::max(a, b) - 1e-6f);
-            EXPECT_GE(csgCombine(CsgOp::Subtract, a, b, k), std::max(a, -b) - 1e-6f);
-            if (std::abs(a - b) >= k) {
-                EXPECT_NEAR(csgCombine(CsgOp::Union, a, b, k), std::min(a, b), 1e-6f);
-            }
-        }
-    }
-    EXPECT_NEAR(csgCombine(CsgOp::Union, 0.0f, 0.0f, 0.5f), -0.125f, 1e-6f);
 }
 
 TEST(EcsSchedule, RunsInOrderAndFlushes) {

@@ -31,7 +31,8 @@ const MalformedScene kMalformed[] = {
     {"float_overflow.json", "/entities/0/transform/position/1: 1e+300 is out of range for a 32-bit float"},
     // Version.
     {"missing_version.json", "/version: missing"},
-    {"version_2.json", "/version: scene format version 2 is newer than this build supports (version 1)"},
+    {"version_3.json", "/version: scene format version 3 is newer than this build supports (version 2)"},
+    {"version_0.json", "/version: unsupported scene format version 0 (expected 1 to 2)"},
     {"version_string.json", "/version: expected an integer, got a string"},
     {"version_fraction.json", "/version: expected an integer, got 1.5"},
     // Strict schema: unknown keys.
@@ -98,6 +99,41 @@ const MalformedScene kMalformed[] = {
     {"missing_gltf_file.json", "/entities/0/gltf: glTF file 'no_such_scene.gltf' not found"},
     {"malformed_gltf_file.json",
      "/entities/0/gltf: " PENUMBRA_SOURCE_DIR "/tests/malformed/gltf/node_cycle.gltf"},
+    // The sdf component (version 2).
+    {"sdf_in_version_1.json",
+     "/entities/0/sdf: the sdf component needs scene format version 2 (this file is version 1)"},
+    {"sdf_no_source.json", "/entities/0/sdf: an sdf component needs \"shape\" (one analytic shape), \"csg\""},
+    {"sdf_two_sources.json",
+     "/entities/0/sdf/psdf: give one of \"shape\", \"csg\", \"psdf\" or \"mesh\" (this "
+     "component already has \"shape\")"},
+    {"sdf_unknown_key.json", "/entities/0/sdf/steps: unknown key 'steps' in an sdf component"},
+    {"sdf_unknown_shape.json", "/entities/0/sdf/shape/shape: unknown shape 'pyramid' (expected sphere, box,"},
+    {"sdf_negative_radius.json", "/entities/0/sdf/shape: sphere: radius must be > 0 (got -1)"},
+    {"sdf_radius_string.json", "/entities/0/sdf/shape/radius: expected a number, got a string"},
+    {"sdf_csg_one_child.json",
+     "/entities/0/sdf/csg/children: a union node needs at least two children (got 1)"},
+    {"sdf_unknown_op.json",
+     "/entities/0/sdf/csg/op: unknown operation 'xor' (expected union, subtract, intersect or "
+     "repeat)"},
+    {"sdf_op_as_shape.json", "/entities/0/sdf/shape: expected a shape node with \"shape\""},
+    {"sdf_repeat_overlap.json",
+     "/entities/0/sdf/csg: the repeated shape's bounds on x ([-1, 1]) must lie strictly "
+     "inside its cell (-0.75, 0.75)"},
+    {"sdf_repeat_count_zero.json", "/entities/0/sdf/csg/count/0: 0 is out of range [1, 1024]"},
+    {"sdf_nonuniform_shape_scale.json",
+     "/entities/0/sdf/csg/children/1/transform/scale: a shape's scale is one number (uniform), got an array"},
+    {"sdf_nested_bad_child.json", "/entities/0/sdf/csg/children/1: box: halfExtents must be > 0 (got -1)"},
+    {"sdf_smooth_radius_zero.json", "/entities/0/sdf/csg/smoothRadius: smoothRadius must be > 0 (got 0)"},
+    {"sdf_too_deep.json",
+     "/entities/0/sdf/csg: record 17: the program needs a distance stack deeper than 16"},
+    {"sdf_missing_psdf.json", "/entities/0/sdf/psdf: .psdf file 'no_such.psdf' not found (resolved to '"},
+    {"sdf_bad_psdf.json",
+     "/entities/0/sdf/psdf: " PENUMBRA_SOURCE_DIR "/tests/malformed/psdf/bad_payload_crc.psdf"},
+    {"sdf_missing_mesh.json", "/entities/0/sdf/mesh: mesh file 'no_such_mesh.ply' not found (resolved to '"},
+    {"sdf_resolution_without_mesh.json",
+     "/entities/0/sdf/resolution: \"resolution\" applies to \"mesh\" only (the bake resolution)"},
+    {"sdf_resolution_too_high.json", "/entities/0/sdf/resolution: 4096 is out of range [8, 1024]"},
+    {"sdf_max_steps_zero.json", "/entities/0/sdf/maxSteps: 0 is out of range [1, 10000]"},
 };
 
 std::string malformedDir() { return test::sourcePath("tests/malformed/scene/"); }
