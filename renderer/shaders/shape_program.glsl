@@ -36,9 +36,9 @@
 #error "define SHAPE_RECORDS_SET and SHAPE_RECORDS_BINDING before including shape_program.glsl"
 #endif
 
-// One 64-byte record, the layout of sdf::ShapeInstruction: opi.x = op, opi.yzw = i[0..2].
+// One 64-byte record, the layout of sdf::ShapeInstruction: head.x = op, head.yzw = i[0..2].
 struct ShapeInstruction {
-    uvec4 opi;
+    uvec4 head;
     vec4 a;
     vec4 b;
     vec4 c;
@@ -183,10 +183,10 @@ float evalShapeProgram(uint first, vec3 point) {
     framePoint[0] = point;
     frameScale[0] = 1.0;
     float mag = max(abs(point.x), max(abs(point.y), abs(point.z)));
-    uint count = shapeRecords[first].opi.z;  // header: i = (version, instructions, stacks)
+    uint count = shapeRecords[first].head.z;  // header: i = (version, instructions, stacks)
     for (uint i = first + 1u; i <= first + count; ++i) {
         ShapeInstruction r = shapeRecords[i];
-        uint op = r.opi.x;
+        uint op = r.head.x;
         vec3 p = framePoint[fp];
         float s = frameScale[fp];
         if (op >= SHAPE_OP_SPHERE && op <= SHAPE_OP_PLANE) {
@@ -215,7 +215,7 @@ float evalShapeProgram(uint first, vec3 point) {
         } else if (op == SHAPE_OP_PUSH_REPEAT) {
             mag = max(mag, max(r.a.x, max(r.a.y, r.a.z)) * s);
             ivec3 id;
-            framePoint[fp + 1] = shapeRepeatCell(p, r.a.xyz, r.opi.yzw, id);
+            framePoint[fp + 1] = shapeRepeatCell(p, r.a.xyz, r.head.yzw, id);
             frameScale[fp + 1] = s;
             fp += 1;
         } else if (op == SHAPE_OP_POP_TRANSFORM) {
@@ -223,9 +223,9 @@ float evalShapeProgram(uint first, vec3 point) {
         } else if (op == SHAPE_OP_POP_REPEAT) {
             fp -= 1;
             ivec3 id;
-            vec3 local = shapeRepeatCell(framePoint[fp], r.a.xyz, r.opi.yzw, id);
-            float g = shapeOtherCopiesBound(local, id, r.a.xyz, r.opi.yzw, r.b.xyz, r.c.xyz) * frameScale[fp];
-            stack[sp - 1] = min(stack[sp - 1], g);
+            vec3 local = shapeRepeatCell(framePoint[fp], r.a.xyz, r.head.yzw, id);
+            float g = shapeOtherCopiesBound(local, id, r.a.xyz, r.head.yzw, r.b.xyz, r.c.xyz);
+            stack[sp - 1] = min(stack[sp - 1], g * frameScale[fp]);
         }
     }
     float d = sp > 0 ? stack[sp - 1] : SHAPE_FAR;

@@ -237,7 +237,7 @@ protected:
         std::vector<eval::ShapeInstruction> records(d.records.size());
         for (size_t i = 0; i < records.size(); ++i) {
             const sdf::ShapeInstruction& r = d.records[i];
-            records[i].opi = glm::uvec4(r.op, r.i[0], r.i[1], r.i[2]);
+            records[i].head = glm::uvec4(r.op, r.i[0], r.i[1], r.i[2]);
             records[i].a = r.a;
             records[i].b = r.b;
             records[i].c = r.c;
