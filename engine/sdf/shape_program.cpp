@@ -329,6 +329,7 @@ public:
     Compiler(const ShapeProgramLimits& limits, std::string& error) : m_limits(limits), m_error(error) {}
 
     std::vector<ShapeInstruction> records;
+    std::vector<std::string> origins;  // the node pointer that emitted each record (header: "")
 
     bool emit(const ShapeNode& n, const std::string& ptr, int depth, ShapeBounds& bounds) {
         if (depth > int(m_limits.maxDistanceStack) + int(m_limits.maxFrameStack) + 64) {
@@ -445,6 +446,7 @@ private:
                         fmt::format("the program needs more than {} instructions", m_limits.maxInstructions));
         }
         records.push_back(ins);
+        origins.push_back(ptr);
         return true;
     }
     bool fail(const std::string& ptr, const std::string& reason) {
@@ -464,14 +466,17 @@ struct Analysis {
     uint32_t maxFrameStack = 0;
 };
 
+// On failure `error` is "record N: reason"; failedRecord / failedReason hold N and the reason alone.
 bool analyse(const std::vector<ShapeInstruction>& records, bool checkHeader, const ShapeProgramLimits& limits,
-             Analysis& out, std::string& error) {
+             Analysis& out, std::string& error, size_t& failedRecord, std::string& failedReason) {
     auto fail = [&](size_t i, const std::string& reason) {
         error = fmt::format("record {}: {}", i, reason);
+        failedRecord = i;
+        failedReason = reason;
         return false;
     };
     if (records.empty()) {
-        error = "an empty program (no header record)";
+        error = failedReason = "an empty program (no header record)";
         return false;
     }
     const ShapeInstruction& h = records[0];
@@ -699,12 +704,21 @@ bool compileShapeProgram(const ShapeNode& root, ShapeProgram& out, std::string& 
                          const ShapeProgramLimits& limits) {
     Compiler compiler(limits, error);
     compiler.records.emplace_back();  // the header, filled below
+    compiler.origins.emplace_back();
     ShapeBounds bounds;
     if (!compiler.emit(root, "", 0, bounds)) return false;
     ShapeProgram program;
     program.records = std::move(compiler.records);
     Analysis analysis;
-    if (!analyse(program.records, false, limits, analysis, error)) return false;
+    size_t failedRecord = 0;
+    std::string failedReason;
+    if (!analyse(program.records, false, limits, analysis, error, failedRecord, failedReason)) {
+        // Name the tree node that emitted the record rather than the record.
+        const std::string& node =
+            failedRecord < compiler.origins.size() ? compiler.origins[failedRecord] : "";
+        error = node.empty() ? failedReason : fmt::format("{}: {}", node, failedReason);
+        return false;
+    }
     program.bounds = analysis.bounds;
     program.maxDistanceStack = analysis.maxDistanceStack;
     program.maxFrameStack = analysis.maxFrameStack;
@@ -723,7 +737,9 @@ bool compileShapeProgram(const ShapeNode& root, ShapeProgram& out, std::string& 
 bool validateShapeProgram(const std::vector<ShapeInstruction>& records, std::string& error,
                           const ShapeProgramLimits& limits) {
     Analysis analysis;
-    if (!analyse(records, true, limits, analysis, error)) return false;
+    size_t failedRecord = 0;
+    std::string failedReason;
+    if (!analyse(records, true, limits, analysis, error, failedRecord, failedReason)) return false;
     const ShapeInstruction& h = records[0];
     if (h.i[2] != (analysis.maxDistanceStack | (analysis.maxFrameStack << 16))) {
         error =

@@ -125,7 +125,7 @@ const MalformedScene kMalformed[] = {
     {"sdf_nested_bad_child.json", "/entities/0/sdf/csg/children/1: box: halfExtents must be > 0 (got -1)"},
     {"sdf_smooth_radius_zero.json", "/entities/0/sdf/csg/smoothRadius: smoothRadius must be > 0 (got 0)"},
     {"sdf_too_deep.json",
-     "/entities/0/sdf/csg: record 17: the program needs a distance stack deeper than 16"},
+     "/children/1/children/1/children/0: the program needs a distance stack deeper than 16 (every operand"},
     {"sdf_missing_psdf.json", "/entities/0/sdf/psdf: .psdf file 'no_such.psdf' not found (resolved to '"},
     {"sdf_bad_psdf.json",
      "/entities/0/sdf/psdf: " PENUMBRA_SOURCE_DIR "/tests/malformed/psdf/bad_payload_crc.psdf"},

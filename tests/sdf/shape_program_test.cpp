@@ -475,7 +475,14 @@ TEST(ShapeProgram, TooDeepOrTooLongIsRefused) {
         framed = ShapeNode::csg(CsgOp::Union, {framed, ShapeNode::sphere(1)});
         framed.placed({0.5, 0, 0});
     }
-    EXPECT_NE(compileError(framed).find("the program nests frames deeper than 8"), std::string::npos);
+    // The error names the node whose transform opens the ninth frame, not a record index.
+    const std::string frameError = compileError(framed);
+    EXPECT_EQ(
+        frameError.rfind("/children/0/children/0/children/0/children/0/children/0/children/0/children/0/"
+                         "children/0: the program nests frames deeper than 8",
+                         0),
+        0u)
+        << frameError;
 }
 
 TEST(ShapeProgram, MalformedRecordsAreRefused) {
