@@ -265,6 +265,15 @@ float roundUp(double v) {
 
 glm::dvec4 d4(const glm::vec4& v) { return glm::dvec4(v); }
 
+// The float values a record holds, read back through memory. The compiler derives bounds from
+// exactly what the records hold, because the validator recomputes them from the records; computed
+// in registers, GCC 12 at -O2/-O3 produced the unrounded double values here (a repetition's spacing,
+// a transform's translation), so nested or transformed repetitions were refused by their own check.
+glm::dvec4 storedValues(const glm::vec4& v) {
+    volatile float f[4] = {v.x, v.y, v.z, v.w};
+    return glm::dvec4(double(f[0]), double(f[1]), double(f[2]), double(f[3]));
+}
+
 // ---- repetition: cell selection and the bound of the copies not evaluated ---------------------------
 
 struct RepeatCell {
@@ -338,6 +347,7 @@ public:
         const ShapeTransform& tf = n.transform;
         const bool placed = !tf.identity();
         glm::dquat r = tf.rotation;
+        ShapeInstruction pushedTransform;  // the PushTransform record, when placed
         if (placed) {
             if (std::string e = checkTransform(tf.translation, r, tf.scale, m_limits.maxMagnitude);
                 !e.empty()) {
@@ -349,6 +359,7 @@ public:
             ins.a = glm::vec4(glm::vec3(tf.translation), float(tf.scale));
             ins.b = glm::vec4(float(r.x), float(r.y), float(r.z), float(r.w));
             if (!push(ins, ptr)) return false;
+            pushedTransform = ins;
         }
         ShapeBounds local;
         switch (n.type) {
@@ -410,7 +421,7 @@ public:
                 ins.op = uint32_t(ShapeOp::PushRepeat);
                 ins.i = {n.count.x, n.count.y, n.count.z};
                 ins.a = glm::vec4(glm::vec3(n.spacing), 0.0f);
-                const glm::dvec3 spacing(glm::vec3(ins.a));
+                const glm::dvec3 spacing(storedValues(ins.a));
                 if (std::string e = checkRepeat(spacing, n.count, m_limits); !e.empty()) return fail(ptr, e);
                 if (!push(ins, ptr)) return false;
                 ShapeBounds cb;
@@ -431,10 +442,9 @@ public:
             ShapeInstruction ins;
             ins.op = uint32_t(ShapeOp::PopTransform);
             if (!push(ins, ptr)) return false;
-            const glm::dquat rf(double(float(r.w)), double(float(r.x)), double(float(r.y)),
-                                double(float(r.z)));
-            bounds =
-                transformBounds(local, glm::dvec3(glm::vec3(tf.translation)), rf, double(float(tf.scale)));
+            const glm::dvec4 t = storedValues(pushedTransform.a);
+            const glm::dvec4 q = storedValues(pushedTransform.b);
+            bounds = transformBounds(local, glm::dvec3(t), glm::dquat(q.w, q.x, q.y, q.z), t.w);
         }
         return true;
     }

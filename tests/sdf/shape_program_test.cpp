@@ -576,5 +576,34 @@ TEST(ShapeProgram, MalformedRecordsAreRefused) {
               "record 6: the program leaves 2 distances (expected 1)");
 }
 
+// Regression (Release builds): nested repetitions and a repetition of a rotated and translated
+// child were refused by the compiler's own validation ("the stored child bounds do not contain the
+// repeated shape"): the compiler derived the bounds from unrounded spacings and translations while
+// the validator recomputes them from the float records. Both programs compile and validate now.
+TEST(ShapeProgram, NestedAndRotatedRepetitionsCompile) {
+    const ShapeNode nested = ShapeNode::repeat(
+        ShapeNode::repeat(ShapeNode::box({0.1, 0.1, 0.1}), {0.3, 0, 0}, {3, 1, 1}), {0, 0, 1}, {1, 1, 4});
+    ShapeNode rotatedChild = ShapeNode::capsule(0.15, 0.2);
+    rotatedChild.placed({0, 0.1, 0}, glm::angleAxis(0.7, glm::normalize(glm::dvec3(1, 2, 3))));
+    const ShapeNode rotated = ShapeNode::repeat(rotatedChild, {1, 0, 1.2}, {1, 1, 1});
+    for (const ShapeNode* root : {&nested, &rotated}) {
+        ShapeProgram program;
+        std::string error;
+        ASSERT_TRUE(compileShapeProgram(*root, program, error)) << error;
+        ASSERT_TRUE(validateShapeProgram(program.records, error)) << error;
+    }
+    // The nested grid: boxes of half size 0.1 (0.1f in the records) at x in {-0.3, 0, 0.3} and
+    // z in {-1.5, -0.5, 0.5, 1.5}. On the top face of the corner box the distance is that of the
+    // float half size (1e-12); straight above it, never above the exact distance.
+    ShapeProgram program;
+    std::string error;
+    ASSERT_TRUE(compileShapeProgram(nested, program, error)) << error;
+    const double half = double(0.1f);
+    EXPECT_NEAR(evaluateShapeProgram(program, {0.3, 0.1, 1.5}), 0.1 - half, 1e-12);
+    const double above = evaluateShapeProgram(program, {0.3, 0.5, 1.5});
+    EXPECT_GT(above, 0.0);
+    EXPECT_LE(above, 0.5 - half + 1e-12);
+}
+
 }  // namespace
 }  // namespace penumbra::sdf
