@@ -53,6 +53,76 @@ void addTimings(std::vector<PassSeries>& series, const std::vector<fg::FrameTimi
 
 nlohmann::json jsonNumber(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(nullptr); }
 
+// The table: medians over all frames (the first frame also uploads meshes and textures).
+void printPassTable(const std::vector<PassSeries>& series, uint32_t frames) {
+    double gpuTotal = 0, cpuTotal = 0;
+    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
+    for (const PassSeries& s : series) {
+        const double g = median(s.gpu), c = median(s.cpu);
+        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", s.name, g, c);
+        if (std::isfinite(g)) gpuTotal += g;
+        if (std::isfinite(c)) cpuTotal += c;
+    }
+    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
+    if (frames > 1) fmt::print("(medians over {} frames)\n", frames);
+}
+
+// What a run was, for the --stats file (README: "--stats JSON").
+struct StatsRun {
+    const std::string& scene;
+    const rhi::DeviceInfo& info;
+    uint32_t width, height, frames;
+    double fixedDt, simTime;
+    const std::string& cacheDir;
+};
+
+nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::FrameStats& stats,
+                         const std::vector<PassSeries>& series) {
+    const ecs::World& world = engine.world();
+    const assets::AssetManager& assets = engine.assets();
+    nlohmann::json j;
+    j["scene"] = run.scene;
+    j["backend"] = rhi::toString(run.info.backend);
+    j["device"] = run.info.deviceName;
+    j["width"] = run.width;
+    j["height"] = run.height;
+    j["frames"] = run.frames;
+    j["fixedDt"] = run.fixedDt;
+    j["simTime"] = run.simTime;
+    j["updateSteps"] = engine.loop().stepCount();
+    nlohmann::json passes = nlohmann::json::array();
+    for (const PassSeries& s : series) {
+        passes.push_back({{"name", s.name},
+                          {"gpuMs", jsonNumber(median(s.gpu))},
+                          {"cpuMs", jsonNumber(median(s.cpu))},
+                          {"gpuMsLast", jsonNumber(s.gpu.back())},
+                          {"cpuMsLast", jsonNumber(s.cpu.back())},
+                          {"samples", s.gpu.size()}});
+    }
+    j["passes"] = passes;
+    j["memory"] = {{"meshBuffers", stats.memory.meshBuffers},
+                   {"sceneBuffers", stats.memory.sceneBuffers},
+                   {"textures", stats.memory.textures},
+                   {"renderTargets", stats.memory.renderTargets},
+                   {"total", stats.memory.total()}};
+    j["counts"] = {{"entities", world.aliveCount()},
+                   {"meshRenderers", world.count<ecs::MeshRenderer>()},
+                   {"cameras", world.count<ecs::Camera>()},
+                   {"lights", world.count<ecs::Light>()},
+                   {"assets", assets.count()},
+                   {"meshAssets", assets.count(assets::AssetKind::Mesh)},
+                   {"materialAssets", assets.count(assets::AssetKind::Material)},
+                   {"textureAssets", assets.count(assets::AssetKind::Texture)},
+                   {"drawCalls", stats.drawCalls},
+                   {"triangles", stats.triangles}};
+    j["assetCache"] = {{"dir", run.cacheDir},
+                       {"hits", assets.cacheStats().hits},
+                       {"misses", assets.cacheStats().misses},
+                       {"writes", assets.cacheStats().writes},
+                       {"rejected", assets.cacheStats().rejected}};
+    return j;
+}
+
 }  // namespace
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
@@ -198,63 +268,14 @@ int runRender(const RenderOptions& opt) {
         return 1;
     }
 
-    // The table: medians over all frames (the first frame also uploads meshes and textures).
-    double gpuTotal = 0, cpuTotal = 0;
-    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
-    for (const PassSeries& s : series) {
-        const double g = median(s.gpu), c = median(s.cpu);
-        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", s.name, g, c);
-        if (std::isfinite(g)) gpuTotal += g;
-        if (std::isfinite(c)) cpuTotal += c;
-    }
-    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
-    if (opt.frames > 1) fmt::print("(medians over {} frames)\n", opt.frames);
+    printPassTable(series, opt.frames);
 
     const render::FrameStats& stats = renderer->stats();
     const ecs::World& world = engine->world();
-    const assets::AssetManager& assets = engine->assets();
     if (!opt.stats.empty()) {
-        nlohmann::json j;
-        j["scene"] = opt.scene;
-        j["backend"] = rhi::toString(info.backend);
-        j["device"] = info.deviceName;
-        j["width"] = width;
-        j["height"] = height;
-        j["frames"] = opt.frames;
-        j["fixedDt"] = opt.fixedDt;
-        j["simTime"] = lastTime.simTime;
-        j["updateSteps"] = engine->loop().stepCount();
-        nlohmann::json passes = nlohmann::json::array();
-        for (const PassSeries& s : series) {
-            passes.push_back({{"name", s.name},
-                              {"gpuMs", jsonNumber(median(s.gpu))},
-                              {"cpuMs", jsonNumber(median(s.cpu))},
-                              {"gpuMsLast", jsonNumber(s.gpu.back())},
-                              {"cpuMsLast", jsonNumber(s.cpu.back())},
-                              {"samples", s.gpu.size()}});
-        }
-        j["passes"] = passes;
-        j["memory"] = {{"meshBuffers", stats.memory.meshBuffers},
-                       {"sceneBuffers", stats.memory.sceneBuffers},
-                       {"textures", stats.memory.textures},
-                       {"renderTargets", stats.memory.renderTargets},
-                       {"total", stats.memory.total()}};
-        j["counts"] = {{"entities", world.aliveCount()},
-                       {"meshRenderers", world.count<ecs::MeshRenderer>()},
-                       {"cameras", world.count<ecs::Camera>()},
-                       {"lights", world.count<ecs::Light>()},
-                       {"assets", assets.count()},
-                       {"meshAssets", assets.count(assets::AssetKind::Mesh)},
-                       {"materialAssets", assets.count(assets::AssetKind::Material)},
-                       {"textureAssets", assets.count(assets::AssetKind::Texture)},
-                       {"drawCalls", stats.drawCalls},
-                       {"triangles", stats.triangles}};
-        j["assetCache"] = {{"dir", engineDesc.cacheDir},
-                           {"hits", assets.cacheStats().hits},
-                           {"misses", assets.cacheStats().misses},
-                           {"writes", assets.cacheStats().writes},
-                           {"rejected", assets.cacheStats().rejected}};
-        if (!outputs.writeText(opt.stats, j.dump(2) + "\n", error)) {
+        const StatsRun run{opt.scene,          info, width, height, opt.frames, opt.fixedDt, lastTime.simTime,
+                           engineDesc.cacheDir};
+        if (!outputs.writeText(opt.stats, statsJson(run, *engine, stats, series).dump(2) + "\n", error)) {
             log::error("render: {}", error);
             return 1;
         }
