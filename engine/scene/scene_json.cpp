@@ -431,6 +431,7 @@ private:
     bool parseMaterialRef(const json& v, const std::string& ptr, assets::AssetId& out);
     bool parseSdf(const json& v, const std::string& ptr, ecs::SdfRenderer& out);
     bool parseShapeNode(const json& v, const std::string& ptr, bool leaf, sdf::ShapeNode& out);
+    bool parseShapeLeaf(const json& v, const std::string& ptr, sdf::ShapeNode& out);
     bool parseShapes(const json& v, const std::string& ptr, bool leaf, assets::AssetId& out);
     bool parseCamera(const json& v, const std::string& ptr, ecs::Camera& out);
     bool parseLight(const json& v, const std::string& ptr, ecs::Light& out);
@@ -937,6 +938,75 @@ bool SceneParser::parseShapes(const json& v, const std::string& ptr, bool leaf, 
     return true;
 }
 
+// A leaf node: "shape" and its parameters (the transform is parsed by parseShapeNode).
+bool SceneParser::parseShapeLeaf(const json& v, const std::string& ptr, sdf::ShapeNode& out) {
+    auto num = [&](std::string_view key, double& dst, bool required) {
+        auto it = v.find(key);
+        if (it == v.end()) return !required || fail(ptr, fmt::format("missing \"{}\"", key));
+        float f = 0.0f;
+        if (!number(*it, child(ptr, key), f)) return false;
+        dst = double(f);
+        return true;
+    };
+    std::string name;
+    if (!string(v["shape"], child(ptr, "shape"), name)) return false;
+    out.type = sdf::ShapeNode::Type::Shape;
+    if (!sdf::parseShapeKind(name, out.shape)) {
+        return fail(child(ptr, "shape"), fmt::format("unknown shape '{}' (expected sphere, box, roundedBox, "
+                                                     "capsule, cylinder, torus, cone or plane)",
+                                                     name));
+    }
+    const std::string what = fmt::format("a {} shape", name);
+    glm::dvec4& q = out.params;
+    switch (out.shape) {
+        case sdf::ShapeKind::Sphere:
+            return checkKeys(v, ptr, {"shape", "transform", "radius"}, what) && num("radius", q.x, true);
+        case sdf::ShapeKind::Box:
+        case sdf::ShapeKind::RoundedBox: {
+            const bool rounded = out.shape == sdf::ShapeKind::RoundedBox;
+            if (!(rounded ? checkKeys(v, ptr, {"shape", "transform", "halfExtents", "rounding"}, what)
+                          : checkKeys(v, ptr, {"shape", "transform", "halfExtents"}, what))) {
+                return false;
+            }
+            auto it = v.find("halfExtents");
+            if (it == v.end()) return fail(ptr, "missing \"halfExtents\"");
+            glm::vec3 h(0.0f);
+            if (it->is_number()) {
+                if (!number(*it, child(ptr, "halfExtents"), h.x)) return false;
+                h = glm::vec3(h.x);
+            } else if (!vec3(*it, child(ptr, "halfExtents"), h)) {
+                return false;
+            }
+            q = glm::dvec4(glm::dvec3(h), 0.0);
+            return !rounded || num("rounding", q.w, true);
+        }
+        case sdf::ShapeKind::Capsule:
+            return checkKeys(v, ptr, {"shape", "transform", "radius", "halfLength"}, what) &&
+                   num("radius", q.x, true) && num("halfLength", q.y, true);
+        case sdf::ShapeKind::Cylinder:
+            return checkKeys(v, ptr, {"shape", "transform", "radius", "halfHeight"}, what) &&
+                   num("radius", q.x, true) && num("halfHeight", q.y, true);
+        case sdf::ShapeKind::Torus:
+            return checkKeys(v, ptr, {"shape", "transform", "majorRadius", "minorRadius"}, what) &&
+                   num("majorRadius", q.x, true) && num("minorRadius", q.y, true);
+        case sdf::ShapeKind::Cone:
+            return checkKeys(v, ptr, {"shape", "transform", "bottomRadius", "topRadius", "halfHeight"},
+                             what) &&
+                   num("bottomRadius", q.x, true) && num("topRadius", q.y, false) &&
+                   num("halfHeight", q.z, true);
+        case sdf::ShapeKind::Plane: {
+            if (!checkKeys(v, ptr, {"shape", "transform", "normal", "offset"}, what)) return false;
+            auto it = v.find("normal");
+            if (it == v.end()) return fail(ptr, "missing \"normal\"");
+            glm::vec3 n(0.0f);
+            if (!vec3(*it, child(ptr, "normal"), n)) return false;
+            q = glm::dvec4(glm::dvec3(n), 0.0);
+            return num("offset", q.w, false);
+        }
+    }
+    return false;
+}
+
 bool SceneParser::parseShapeNode(const json& v, const std::string& ptr, bool leaf, sdf::ShapeNode& out) {
     if (!object(v, ptr)) return false;
     if (auto it = v.find("transform"); it != v.end()) {
@@ -967,74 +1037,7 @@ bool SceneParser::parseShapeNode(const json& v, const std::string& ptr, bool lea
                                  : "expected an operation node with \"op\" (union, subtract, intersect or "
                                    "repeat) or a shape node with \"shape\"");
     }
-    auto num = [&](std::string_view key, double& dst, bool required) {
-        auto it = v.find(key);
-        if (it == v.end()) return !required || fail(ptr, fmt::format("missing \"{}\"", key));
-        float f = 0.0f;
-        if (!number(*it, child(ptr, key), f)) return false;
-        dst = double(f);
-        return true;
-    };
-    if (isShape) {
-        std::string name;
-        if (!string(v["shape"], child(ptr, "shape"), name)) return false;
-        out.type = sdf::ShapeNode::Type::Shape;
-        if (!sdf::parseShapeKind(name, out.shape)) {
-            return fail(child(ptr, "shape"),
-                        fmt::format("unknown shape '{}' (expected sphere, box, roundedBox, "
-                                    "capsule, cylinder, torus, cone or plane)",
-                                    name));
-        }
-        const std::string what = fmt::format("a {} shape", name);
-        glm::dvec4& q = out.params;
-        switch (out.shape) {
-            case sdf::ShapeKind::Sphere:
-                return checkKeys(v, ptr, {"shape", "transform", "radius"}, what) && num("radius", q.x, true);
-            case sdf::ShapeKind::Box:
-            case sdf::ShapeKind::RoundedBox: {
-                const bool rounded = out.shape == sdf::ShapeKind::RoundedBox;
-                if (!(rounded ? checkKeys(v, ptr, {"shape", "transform", "halfExtents", "rounding"}, what)
-                              : checkKeys(v, ptr, {"shape", "transform", "halfExtents"}, what))) {
-                    return false;
-                }
-                auto it = v.find("halfExtents");
-                if (it == v.end()) return fail(ptr, "missing \"halfExtents\"");
-                glm::vec3 h(0.0f);
-                if (it->is_number()) {
-                    if (!number(*it, child(ptr, "halfExtents"), h.x)) return false;
-                    h = glm::vec3(h.x);
-                } else if (!vec3(*it, child(ptr, "halfExtents"), h)) {
-                    return false;
-                }
-                q = glm::dvec4(glm::dvec3(h), 0.0);
-                return !rounded || num("rounding", q.w, true);
-            }
-            case sdf::ShapeKind::Capsule:
-                return checkKeys(v, ptr, {"shape", "transform", "radius", "halfLength"}, what) &&
-                       num("radius", q.x, true) && num("halfLength", q.y, true);
-            case sdf::ShapeKind::Cylinder:
-                return checkKeys(v, ptr, {"shape", "transform", "radius", "halfHeight"}, what) &&
-                       num("radius", q.x, true) && num("halfHeight", q.y, true);
-            case sdf::ShapeKind::Torus:
-                return checkKeys(v, ptr, {"shape", "transform", "majorRadius", "minorRadius"}, what) &&
-                       num("majorRadius", q.x, true) && num("minorRadius", q.y, true);
-            case sdf::ShapeKind::Cone:
-                return checkKeys(v, ptr, {"shape", "transform", "bottomRadius", "topRadius", "halfHeight"},
-                                 what) &&
-                       num("bottomRadius", q.x, true) && num("topRadius", q.y, false) &&
-                       num("halfHeight", q.z, true);
-            case sdf::ShapeKind::Plane: {
-                if (!checkKeys(v, ptr, {"shape", "transform", "normal", "offset"}, what)) return false;
-                auto it = v.find("normal");
-                if (it == v.end()) return fail(ptr, "missing \"normal\"");
-                glm::vec3 n(0.0f);
-                if (!vec3(*it, child(ptr, "normal"), n)) return false;
-                q = glm::dvec4(glm::dvec3(n), 0.0);
-                return num("offset", q.w, false);
-            }
-        }
-        return false;
-    }
+    if (isShape) return parseShapeLeaf(v, ptr, out);
     std::string opName;
     if (!string(v["op"], child(ptr, "op"), opName)) return false;
     const bool repeat = opName == "repeat";
