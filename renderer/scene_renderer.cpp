@@ -25,12 +25,14 @@
 #include <algorithm>
 #include <cmath>
 #include <unordered_map>
+#include <unordered_set>
 #include <utility>
 
 #include <fmt/format.h>
 #include <glm/gtc/matrix_inverse.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "engine/core/log.h"
 #include "renderer/core/gpu_cache.h"
 #include "renderer/core/targets.h"
 #include "renderer/features/debug_view.h"
@@ -39,13 +41,15 @@
 #include "renderer/features/lighting_reference.h"
 #include "renderer/features/mesh_gbuffer.h"
 #include "renderer/features/scene_upload.h"
+#include "renderer/features/sdf_scene.h"
+#include "renderer/features/sdf_trace.h"
 
 namespace penumbra::render {
 namespace {
 
 constexpr uint32_t kMaxMaterialsPerFrame = 65536;
 
-enum TargetId : uint32_t { kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kOutput, kTargetCount };
+enum TargetId : uint32_t { kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kAux, kOutput, kTargetCount };
 
 struct TargetInfo {
     const char* name;
@@ -54,7 +58,8 @@ struct TargetInfo {
 constexpr TargetInfo kTargets[kTargetCount] = {
     {"gbuffer.depth", rhi::Format::R32_FLOAT},      {"gbuffer.normal", rhi::Format::RG16_FLOAT},
     {"gbuffer.material", rhi::Format::RGBA8_UNORM}, {"gbuffer.velocity", rhi::Format::RG16_FLOAT},
-    {"gbuffer.albedo", rhi::Format::RGBA8_SRGB},    {"output", rhi::Format::RGBA8_UNORM},
+    {"gbuffer.albedo", rhi::Format::RGBA8_UNORM},   {"gbuffer.aux", rhi::Format::RG32_FLOAT},
+    {"output", rhi::Format::RGBA8_UNORM},
 };
 
 // A render target owned by the renderer; the frame graph tracks its state (importPersistent).
@@ -69,6 +74,17 @@ struct DrawSource {
     glm::mat4 model{1.0f};
 };
 
+// A visible SdfRenderer that will be traced this frame.
+struct SdfSource {
+    ecs::Entity entity;
+    const ecs::SdfRenderer* renderer = nullptr;
+    glm::mat4 model{1.0f};
+    float sigma = 1.0f;  // smallest singular value of the model's 3x3 part
+    uint32_t material = 0;
+    const sdf::ShapeProgram* program = nullptr;  // analytic shapes, or
+    const sdf::PsdfAsset* field = nullptr;       // a distance field
+};
+
 struct LightSource {
     ecs::Entity entity;
     reference::LightSample sample;
@@ -78,6 +94,7 @@ struct LightSource {
 struct CameraSetup {
     glm::vec3 xAxis{1, 0, 0}, yAxis{0, 1, 0}, zAxis{0, 0, 1}, eye{0.0f};
     glm::mat4 view{1.0f}, proj{1.0f}, viewProj{1.0f};
+    float nearPlane = 0.1f;
     float farPlane = 1.0f;
 };
 
@@ -90,7 +107,8 @@ struct FrameGather {
     std::vector<const GpuMesh*> gpuMeshes;
     std::vector<rhi::TextureHandle> materialTexture;  // per material, albedo frames only
     std::vector<LightSource> lights;
-    bool albedo = false;  // some material has a base-colour texture
+    std::vector<SdfSource> sdfs;  // ascending entity index
+    bool albedo = false;          // some material has a base-colour texture
     bool hardwareSrgb = false;
     bool external = false;
 };
@@ -122,6 +140,8 @@ struct SceneRenderer::Impl {
     ecs::Entity historyCamera;
     glm::mat4 prevViewProj{1.0f};
     std::unordered_map<ecs::Entity, glm::mat4> prevModels;
+    std::unordered_set<uint64_t> warnedSdfs;  // SDF entities already warned about (once each)
+    SdfSceneData sdfData;                     // read by sdf_upload's execute
     uint32_t frameIndex = 0;
 
     // the last frame
@@ -136,6 +156,7 @@ struct SceneRenderer::Impl {
     bool lastOwnOutput = false;
     bool lastGbuffer = false;
     bool lastAlbedo = false;
+    bool lastAux = false;
 
     explicit Impl(rhi::Device& d)
         : device(d),
@@ -162,8 +183,10 @@ struct SceneRenderer::Impl {
         Target& t = targets[id];
         if (t.handle) return true;
         using TU = rhi::TextureUsage;
-        rhi::TextureDesc d = renderTargetDesc(kTargets[id].format, width, height, kTargets[id].name,
-                                              TU::ColorTarget | TU::Sampled | TU::CopySrc);
+        // G-buffer targets are also storage images: the SDF trace (compute) reads and writes them.
+        const TU usage =
+            TU::ColorTarget | TU::Sampled | TU::CopySrc | (id == kOutput ? TU::None : TU::Storage);
+        rhi::TextureDesc d = renderTargetDesc(kTargets[id].format, width, height, kTargets[id].name, usage);
         t.handle = device.createTexture(d);
         if (!t.handle) {
             error =
@@ -184,10 +207,14 @@ struct SceneRenderer::Impl {
     bool setupCamera(const ecs::World& world, const FrameDesc& desc, CameraSetup& cam, std::string& error);
     bool gather(const ecs::World& world, const assets::AssetManager& assets, FrameGather& g,
                 std::string& error);
+    bool gatherSdfs(const ecs::World& world, const assets::AssetManager& assets, FrameGather& g,
+                    std::string& error);
     bool uploadAssets(const assets::AssetManager& assets, FrameGather& g, std::string& error);
     bool prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error);
     void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
+    void fillSdfData(const FrameGather& g);
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
+    float debugDepthRange(const CameraSetup& cam, const FrameGather& g) const;
     std::vector<MeshDraw> importDraws(const FrameGather& g);
     void finishFrame(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g,
                      uint64_t transientBytes);
@@ -313,12 +340,13 @@ bool SceneRenderer::Impl::setupCamera(const ecs::World& world, const FrameDesc& 
                                      camera.farPlane);
     cam.proj[1][1] *= -1.0f;  // Vulkan clip space: NDC y = -1 is image row 0
     cam.viewProj = cam.proj * cam.view;
+    cam.nearPlane = camera.nearPlane;
     cam.farPlane = camera.farPlane;
     return true;
 }
 
-// Visible MeshRenderers (ascending entity index), the materials they use (in order of first use)
-// and the lights.
+// Visible MeshRenderers and SdfRenderers (each in ascending entity index), the materials they use
+// (in order of first use: meshes first, then SDF objects) and the lights.
 bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetManager& assets, FrameGather& g,
                                  std::string& error) {
     for (auto [e, mr, t] : world.view<ecs::MeshRenderer, ecs::Transform>())
@@ -327,6 +355,29 @@ bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetMan
               [](const DrawSource& a, const DrawSource& b) { return a.entity.index < b.entity.index; });
     static const ecs::Material kDefaultMaterial{};
     std::unordered_map<assets::AssetId, uint32_t> materialIndex;
+    // The frame's index of material asset `id` (0: the default material), added on first use.
+    auto materialSlot = [&](assets::AssetId id, const std::string& who, uint32_t& slot) {
+        auto it = materialIndex.find(id);
+        if (it == materialIndex.end()) {
+            const ecs::Material* m = id == 0 ? &kDefaultMaterial : assets.material(id);
+            if (!m) {
+                error = fmt::format("{}: material asset {:016x} is not loaded", who, id);
+                return false;
+            }
+            if (m->baseColorTexture != 0) {
+                if (!assets.texture(m->baseColorTexture)) {
+                    error = fmt::format("{}: material {:016x}: base-colour texture {:016x} is not loaded",
+                                        who, id, m->baseColorTexture);
+                    return false;
+                }
+                g.albedo = true;
+            }
+            it = materialIndex.emplace(id, uint32_t(g.materials.size())).first;
+            g.materials.push_back(m);
+        }
+        slot = it->second;
+        return true;
+    };
     g.drawMaterial.resize(g.sources.size());
     g.drawMesh.resize(g.sources.size());
     for (size_t i = 0; i < g.sources.size(); ++i) {
@@ -343,30 +394,16 @@ bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetMan
             error = who + ": world matrix is not finite";
             return false;
         }
-        auto it = materialIndex.find(mr.material);
-        if (it == materialIndex.end()) {
-            const ecs::Material* m = mr.material == 0 ? &kDefaultMaterial : assets.material(mr.material);
-            if (!m) {
-                error = fmt::format("{}: material asset {:016x} is not loaded", who, mr.material);
-                return false;
-            }
-            if (m->baseColorTexture != 0) {
-                if (!assets.texture(m->baseColorTexture)) {
-                    error = fmt::format("{}: material {:016x}: base-colour texture {:016x} is not loaded",
-                                        who, mr.material, m->baseColorTexture);
-                    return false;
-                }
-                g.albedo = true;
-            }
-            it = materialIndex.emplace(mr.material, uint32_t(g.materials.size())).first;
-            g.materials.push_back(m);
-        }
-        g.drawMaterial[i] = it->second;
+        if (!materialSlot(mr.material, who, g.drawMaterial[i])) return false;
     }
+    if (!gatherSdfs(world, assets, g, error)) return false;
+    for (SdfSource& s : g.sdfs)
+        if (!materialSlot(s.renderer->material, entityName(s.entity) + " (SdfRenderer)", s.material))
+            return false;
     if (g.materials.size() > kMaxMaterialsPerFrame) {
         error = fmt::format(
-            "more than {} materials in one frame ({} used by the visible MeshRenderers; the G-buffer "
-            "stores a 16-bit material index)",
+            "more than {} materials in one frame ({} used by the visible MeshRenderers and SdfRenderers; the "
+            "G-buffer stores a 16-bit material index)",
             kMaxMaterialsPerFrame, g.materials.size());
         return false;
     }
@@ -374,6 +411,54 @@ bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetMan
         g.lights.push_back({e, reference::makeLightSample(light, t)});
     std::sort(g.lights.begin(), g.lights.end(),
               [](const LightSource& a, const LightSource& b) { return a.entity.index < b.entity.index; });
+    return true;
+}
+
+// Visible SdfRenderers with a usable transform. An object whose transform cannot be traced (zero,
+// negative or non-finite scale, a non-finite or singular world matrix) or that has no SDF asset
+// (a mesh bake that did not run) is skipped with one warning naming it; the frame still renders.
+// An SDF asset id that names nothing loaded fails the frame (as a missing mesh does).
+bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::AssetManager& assets,
+                                     FrameGather& g, std::string& error) {
+    for (auto [e, sr, t] : world.view<ecs::SdfRenderer, ecs::Transform>()) {
+        if (!sr.visible) continue;
+        SdfSource s;
+        s.entity = e;
+        s.renderer = &sr;
+        s.model = t.worldMatrix;
+        const ecs::Name* name = world.get<ecs::Name>(e);
+        const std::string who =
+            (name && !name->value.empty() ? "'" + name->value + "' (" + entityName(e) + ")" : entityName(e)) +
+            " (SdfRenderer)";
+        auto skip = [&](const std::string& why) {
+            if (warnedSdfs.insert(uint64_t(e.index) << 32 | e.generation).second)
+                log::warn("{}: {}; the object is not drawn", who, why);
+        };
+        if (sr.sdf == 0) {
+            skip(std::string("has no SDF asset (source '") + ecs::sdfSourceName(sr.source) + "')");
+            continue;
+        }
+        s.program = assets.shapeProgram(sr.sdf);
+        s.field = s.program ? nullptr : assets.sdfField(sr.sdf);
+        if (!s.program && !s.field) {
+            error = fmt::format("{}: SDF asset {:016x} is not loaded", who, sr.sdf);
+            return false;
+        }
+        const glm::vec3 sc = t.scale;
+        if (!std::isfinite(sc.x) || !std::isfinite(sc.y) || !std::isfinite(sc.z) || sc.x <= 0.0f ||
+            sc.y <= 0.0f || sc.z <= 0.0f) {
+            skip(fmt::format("scale ({}, {}, {}) is zero, negative or not finite", sc.x, sc.y, sc.z));
+            continue;
+        }
+        s.sigma = finite(s.model) ? smallestSingularValue(glm::mat3(s.model)) : 0.0f;
+        if (!finite(s.model) || !(s.sigma > 1e-20f) || glm::determinant(glm::mat3(s.model)) <= 0.0f) {
+            skip("world matrix is not finite, singular or mirrored");
+            continue;
+        }
+        g.sdfs.push_back(s);
+    }
+    std::sort(g.sdfs.begin(), g.sdfs.end(),
+              [](const SdfSource& a, const SdfSource& b) { return a.entity.index < b.entity.index; });
     return true;
 }
 
@@ -413,9 +498,12 @@ bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGathe
         width = desc.width;
         height = desc.height;
     }
-    const bool drawing = !g.sources.empty();
-    for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kOutput}) {
-        const bool needed = id == kOutput ? !g.external : drawing && (id != kAlbedo || g.albedo);
+    const bool drawing = !g.sources.empty() || !g.sdfs.empty();
+    for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kAux, kOutput}) {
+        const bool needed = id == kOutput   ? !g.external
+                            : id == kAlbedo ? drawing && g.albedo
+                            : id == kAux    ? drawing && desc.aux
+                                            : drawing;
         if (!needed)
             release(targets[id]);
         else if (!ensureTarget(id, error))
@@ -467,8 +555,49 @@ void SceneRenderer::Impl::fillFrameData(const FrameDesc& desc, const CameraSetup
         const glm::mat3 nm =
             std::abs(glm::determinant(m3)) > 1e-30f ? glm::inverseTranspose(m3) : glm::mat3(1.0f);
         o.normalMatrix = glm::mat4(nm);
-        o.info = {g.drawMaterial[i], 0u, 0u, 0u};
+        o.info = {g.drawMaterial[i], g.sources[i].entity.index, 0u, 0u};
         fd.objects.push_back(o);
+    }
+    fillSdfData(g);
+}
+
+// The SDF objects and the records of every shape program they use (each program once).
+void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
+    SdfSceneData& sd = sdfData;
+    sd = {};
+    std::unordered_map<const sdf::ShapeProgram*, uint32_t> firstRecord;
+    auto bound = [](double v) { return float(std::clamp(v, -double(kSdfUnbounded), double(kSdfUnbounded))); };
+    for (const SdfSource& s : g.sdfs) {
+        GpuSdfObject o{};
+        o.model = s.model;
+        o.worldToLocal = glm::inverse(s.model);
+        auto prev = prevModels.find(s.entity);
+        o.prevModel = prev != prevModels.end() ? prev->second : s.model;
+        glm::dvec3 lo, hi;
+        if (s.program) {
+            auto [it, added] = firstRecord.emplace(s.program, uint32_t(sd.records.size()));
+            if (added)
+                sd.records.insert(sd.records.end(), s.program->records.begin(), s.program->records.end());
+            o.info = {uint32_t(SdfKind::Shapes), it->second, s.material, s.entity.index};
+            lo = s.program->bounds.min;
+            hi = s.program->bounds.max;
+        } else {
+            // The solid lies within the source mesh bounds; one voxel more covers hits found
+            // within the hit epsilon just outside the surface.
+            const sdf::PsdfHeader& h = s.field->header;
+            o.info = {uint32_t(SdfKind::Field), 0u, s.material, s.entity.index};
+            lo = h.boundsMin - h.voxelSize;
+            hi = h.boundsMax + h.voxelSize;
+        }
+        // A relative margin keeps rays that graze a box edge (float rounding) inside it.
+        const glm::dvec3 margin = 1e-4 * glm::max(glm::abs(lo), glm::abs(hi)) + 1e-6;
+        for (int a = 0; a < 3; ++a) {
+            o.boundsMin[a] = bound(std::isfinite(lo[a]) ? lo[a] - margin[a] : -HUGE_VAL);
+            o.boundsMax[a] = bound(std::isfinite(hi[a]) ? hi[a] + margin[a] : HUGE_VAL);
+        }
+        o.boundsMin.w = s.sigma;
+        o.params = {s.renderer->maxSteps, 0u, 0u, 0u};
+        sd.objects.push_back(o);
     }
 }
 
@@ -525,7 +654,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     out.color = g.external
                     ? graph.importTexture("output", desc.target, desc.targetAccess, desc.targetFinalAccess)
                     : graph.importPersistent("output", targets[kOutput].handle, rhi::Access::CopySrc);
-    if (g.sources.empty()) {
+    if (g.sources.empty() && g.sdfs.empty()) {
         const glm::vec3 bg = desc.settings.background * desc.settings.exposure;
         std::array<float, 4> encoded{};
         // An sRGB target encodes on write (clears included): give it the linear value.
@@ -542,24 +671,52 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         return graph.importPersistent(kTargets[id].name, targets[id].handle, rhi::Access::ShaderSampled);
     };
     GBuffer& gb = board.add<GBuffer>();
-    gb = {importTarget(kDepth), importTarget(kNormal), importTarget(kMaterial), importTarget(kVelocity),
-          g.albedo ? importTarget(kAlbedo) : fg::TextureRef{}};
-    const uint64_t transientBytes = addMeshGBuffer(fc, importDraws(g));
-    if (desc.debugView != DebugView::None) {
-        // The depth view spans the camera to the farthest drawn mesh's bounding sphere.
-        float farthest = 0.0f;
-        for (size_t i = 0; i < g.sources.size(); ++i) {
-            const glm::mat4& m = g.sources[i].model;
-            const float scale = std::max(
-                {glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))});
-            farthest = std::max(
-                farthest, glm::dot(glm::vec3(m[3]) - cam.eye, -cam.zAxis) + scale * g.gpuMeshes[i]->radius);
-        }
-        addDebugView(fc, desc.debugView, std::clamp(farthest, 1e-6f, cam.farPlane));
-    } else {
-        addLighting(fc);
+    gb = {importTarget(kDepth),
+          importTarget(kNormal),
+          importTarget(kMaterial),
+          importTarget(kVelocity),
+          g.albedo ? importTarget(kAlbedo) : fg::TextureRef{},
+          desc.aux ? importTarget(kAux) : fg::TextureRef{}};
+    uint64_t transientBytes = 0;
+    if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g));
+    if (!g.sdfs.empty()) {
+        addSdfSceneUpload(fc, sdfData);
+        SdfTraceDesc trace;
+        trace.settings = desc.settings.resolvedTrace();
+        trace.raster = !g.sources.empty();
+        trace.nearPlane = cam.nearPlane;
+        trace.farPlane = cam.farPlane;
+        trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
+        addSdfTrace(fc, trace);
     }
+    if (desc.debugView != DebugView::None)
+        addDebugView(fc, desc.debugView, debugDepthRange(cam, g));
+    else
+        addLighting(fc);
     return transientBytes;
+}
+
+// The depth debug view spans the camera to the farthest drawn bounding sphere (meshes, bounded SDF
+// objects), at most the far plane.
+float SceneRenderer::Impl::debugDepthRange(const CameraSetup& cam, const FrameGather& g) const {
+    float farthest = 0.0f;
+    auto sphere = [&](const glm::mat4& m, glm::vec3 center, float radius) {
+        const float scale = std::max(
+            {glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))});
+        const glm::vec3 c = glm::vec3(m * glm::vec4(center, 1.0f));
+        farthest = std::max(farthest, glm::dot(c - cam.eye, -cam.zAxis) + scale * radius);
+    };
+    for (size_t i = 0; i < g.sources.size(); ++i)
+        sphere(g.sources[i].model, glm::vec3(0.0f), g.gpuMeshes[i]->radius);
+    for (const GpuSdfObject& o : sdfData.objects) {
+        const glm::vec3 lo(o.boundsMin), hi(o.boundsMax);
+        if (glm::max(glm::abs(lo), glm::abs(hi)).x >= kSdfUnbounded * 0.5f ||
+            std::max({std::abs(lo.y), std::abs(hi.y), std::abs(lo.z), std::abs(hi.z)}) >=
+                kSdfUnbounded * 0.5f)
+            continue;  // unbounded (planes): no finite sphere
+        sphere(o.model, 0.5f * (lo + hi), 0.5f * glm::length(hi - lo));
+    }
+    return std::clamp(farthest > 0.0f ? farthest : cam.farPlane, 1e-6f, cam.farPlane);
 }
 
 // History for the next frame's velocity, timings and statistics.
@@ -567,13 +724,15 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
                                       uint64_t transientBytes) {
     haveFrame = true;
     lastOwnOutput = !g.external;
-    lastGbuffer = !g.sources.empty();
+    lastGbuffer = !g.sources.empty() || !g.sdfs.empty();
     lastAlbedo = lastGbuffer && g.albedo;
+    lastAux = lastGbuffer && desc.aux;
     haveHistory = true;
     historyCamera = desc.camera;
     prevViewProj = cam.viewProj;
     prevModels.clear();
     for (const DrawSource& src : g.sources) prevModels[src.entity] = src.model;
+    for (const SdfSource& src : g.sdfs) prevModels[src.entity] = src.model;
     ++frameIndex;
 
     FrameStats& st = stats;
@@ -588,6 +747,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.memory.sceneBuffers = board.has<SceneBuffers>() ? board.find<SceneBuffers>()->bytes : 0;
     st.memory.renderTargets = targetBytes() + transientBytes;
     st.drawCalls = uint32_t(g.sources.size());
+    st.sdfObjects = uint32_t(g.sdfs.size());
+    if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
@@ -631,9 +792,10 @@ bool SceneRenderer::readPixels(ImageRGBA8& out, std::string& error) {
 bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
                                std::string& error) {
     Impl& s = *m_impl;
-    for (uint32_t id = 0; id < kAlbedo + 1; ++id) {
+    for (uint32_t id = 0; id < kAux + 1; ++id) {
         if (name != kTargets[id].name) continue;
-        const bool present = s.haveFrame && s.lastGbuffer && (id != kAlbedo || s.lastAlbedo);
+        const bool present =
+            s.haveFrame && s.lastGbuffer && (id != kAlbedo || s.lastAlbedo) && (id != kAux || s.lastAux);
         if (!present) {
             error = "scene renderer: readTarget: '" + name + "' was not part of the last frame";
             return false;
@@ -646,8 +808,9 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
         format = kTargets[id].format;
         return true;
     }
-    error = "scene renderer: readTarget: unknown target '" + name +
-            "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo)";
+    error =
+        "scene renderer: readTarget: unknown target '" + name +
+        "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo, gbuffer.aux)";
     return false;
 }
 

@@ -3,12 +3,16 @@
 //   scene_upload   (transfer)  per-frame camera, lights and materials; mesh vertex/index buffers
 //                              and material textures are uploaded once per asset and kept
 //   gbuffer_mesh   (raster)    MeshRenderer entities into the deferred G-buffer
+//   sdf_upload     (transfer)  the frame's SDF objects and shape-program records
+//   sdf_trace      (compute)   sphere tracing of the SdfRenderer entities into the same G-buffer,
+//                              bounded by the mesh depth (hybrid)
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
 //                              directional + point lights, ambient) + exposure + tone mapping,
 //                              written sRGB-encoded into the RGBA8 output
 //   debug_view     (raster)    instead of lighting when FrameDesc::debugView is set: one G-buffer
 //                              channel (normals, depth, albedo) in the output
-// A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass).
+// A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass; no
+// SdfRenderer: no sdf_upload or sdf_trace pass).
 //
 // G-buffer (after mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
 //   gbuffer.depth     R32_FLOAT    linear view depth in scene units (0 = nothing hit)
@@ -20,8 +24,11 @@
 // subsurface thickness (no pass computes it yet) will need its own target when it arrives.
 // plus, outside the 96 bits (as in mTec: "other buffers"):
 //   gbuffer.velocity  RG16_FLOAT   screen-space motion to the previous frame, in pixels
-//   gbuffer.albedo    RGBA8_SRGB   base colour x texture; only when a material has a base-colour
-//                                  texture (otherwise lighting reads the material's factor)
+//   gbuffer.albedo    RGBA8_UNORM  base colour x texture, sRGB-encoded by the shaders (a UNORM target so
+//                                  the compute trace can write it); only when a material has a
+//                                  base-colour texture (otherwise lighting reads the material's factor)
+//   gbuffer.aux       RG32_FLOAT   entity index (-1 background) and sphere-trace steps; only when
+//                                  FrameDesc::aux asks for it (AOVs, debug views)
 //   depth             D32_FLOAT    hardware depth for the raster passes
 #pragma once
 
@@ -34,8 +41,8 @@
 #include "engine/ecs/world.h"
 #include "engine/image/image.h"
 #include "engine/scene/scene.h"
-#include "renderer/features/debug_view.h"
 #include "renderer/core/gbuffer_encoding.h"
+#include "renderer/features/debug_view.h"
 #include "renderer/frame_graph/frame_graph.h"
 #include "rhi/device.h"
 
@@ -54,6 +61,7 @@ struct FrameStats {
     std::vector<fg::PassTiming> passes;  // executed passes in order
     MemoryReport memory;
     uint32_t drawCalls = 0;
+    uint32_t sdfObjects = 0;  // SdfRenderer entities traced
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;
@@ -72,6 +80,7 @@ struct FrameDesc {
     rhi::Access targetAccess = rhi::Access::None;
     rhi::Access targetFinalAccess = rhi::Access::ShaderSampled;
     DebugView debugView = DebugView::None;  // show a G-buffer channel instead of the lit image
+    bool aux = false;  // also write gbuffer.aux (entity index, trace steps) for AOVs and debug views
 };
 
 class SceneRenderer {

@@ -57,6 +57,59 @@ bool parseToneMapper(std::string_view s, ToneMapper& out) {
     return false;
 }
 
+const char* toString(TraceQuality q) {
+    switch (q) {
+        case TraceQuality::Low:
+            return "low";
+        case TraceQuality::Medium:
+            return "medium";
+        case TraceQuality::High:
+            return "high";
+        case TraceQuality::Reference:
+            return "reference";
+    }
+    return "medium";
+}
+
+bool parseTraceQuality(std::string_view text, TraceQuality& out) {
+    for (TraceQuality q :
+         {TraceQuality::Low, TraceQuality::Medium, TraceQuality::High, TraceQuality::Reference})
+        if (text == toString(q)) {
+            out = q;
+            return true;
+        }
+    return false;
+}
+
+TraceSettings tracePreset(TraceQuality quality) {
+    TraceSettings s;  // medium
+    switch (quality) {
+        case TraceQuality::Low:
+            s = {64, 0, 1.0f, 1.0f, 1.5f, 0.5f};
+            break;
+        case TraceQuality::Medium:
+            break;
+        case TraceQuality::High:
+            s = {256, 2, 0.25f, 0.25f, 1.2f, 1.0f};
+            break;
+        case TraceQuality::Reference:
+            s = {2048, 4, 0.01f, 0.05f, 1.0f, 1.0f};
+            break;
+    }
+    return s;
+}
+
+TraceSettings RenderSettings::resolvedTrace() const {
+    TraceSettings s = tracePreset(quality);
+    if (trace.maxSteps) s.maxSteps = *trace.maxSteps;
+    if (trace.refineSteps) s.refineSteps = *trace.refineSteps;
+    if (trace.hitEpsilon) s.hitEpsilon = *trace.hitEpsilon;
+    if (trace.normalEpsilon) s.normalEpsilon = *trace.normalEpsilon;
+    if (trace.overRelaxation) s.overRelaxation = *trace.overRelaxation;
+    if (trace.fieldSafety) s.fieldSafety = *trace.fieldSafety;
+    return s;
+}
+
 void spinSystem(ecs::World& world, double dt) {
     world.view<ecs::Transform, const Spin>().each([dt](ecs::Transform& t, const Spin& s) {
         const float angle = float(double(s.radiansPerSecond) * dt);

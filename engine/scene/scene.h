@@ -14,6 +14,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -35,16 +36,43 @@ bool parseShadingModel(std::string_view s, ShadingModel& out);
 bool parseToneMapper(std::string_view s, ToneMapper& out);
 
 // The "render" object of a scene file.
+// Sphere-tracing settings of the SDF trace (renderer/features/sdf_trace.h explains each one).
+// Epsilons are in pixel footprints: the size of one pixel at the distance of the point.
+enum class TraceQuality : uint8_t { Low, Medium, High, Reference };
+const char* toString(TraceQuality q);  // "low", "medium", "high", "reference"
+bool parseTraceQuality(std::string_view text, TraceQuality& out);
+
+struct TraceSettings {
+    uint32_t maxSteps = 128;      // step limit per ray (an object's own maxSteps may raise it)
+    uint32_t refineSteps = 1;     // plain steps on the raw field after a hit (lands on the surface)
+    float hitEpsilon = 0.5f;      // hit when the distance is below this many pixel footprints
+    float normalEpsilon = 0.5f;   // gradient step for normals, pixel footprints
+    float overRelaxation = 1.3f;  // Keinert's omega (1 = plain sphere tracing), in [1, 2)
+    float fieldSafety = 1.0f;     // times the trilinear interpolation bound subtracted from fields
+};
+// The preset of a quality level (docs/FORMATS.md lists the values).
+TraceSettings tracePreset(TraceQuality quality);
+
+// Settings a scene's render block sets one by one over the preset.
+struct TraceOverrides {
+    std::optional<uint32_t> maxSteps, refineSteps;
+    std::optional<float> hitEpsilon, normalEpsilon, overRelaxation, fieldSafety;
+};
+
 struct RenderSettings {
     uint32_t width = 640;
     uint32_t height = 360;
     ShadingModel shading = ShadingModel::CookTorrance;
     ToneMapper toneMapper = ToneMapper::Aces;
-    float exposure = 1.0f;        // multiplies linear radiance before tone mapping
-    glm::vec3 ambient{0.03f};     // constant ambient radiance (linear RGB)
-    glm::vec3 background{0.0f};   // linear RGB where nothing is hit
-    std::string camera;           // camera entity name; empty = the first camera
-    double fixedDt = 1.0 / 60.0;  // update step of the app loop (seconds)
+    float exposure = 1.0f;                        // multiplies linear radiance before tone mapping
+    glm::vec3 ambient{0.03f};                     // constant ambient radiance (linear RGB)
+    glm::vec3 background{0.0f};                   // linear RGB where nothing is hit
+    std::string camera;                           // camera entity name; empty = the first camera
+    double fixedDt = 1.0 / 60.0;                  // update step of the app loop (seconds)
+    TraceQuality quality = TraceQuality::Medium;  // the trace preset (--quality replaces it)
+    TraceOverrides trace;                         // the scene's per-setting overrides
+    // The preset of `quality` with the overrides applied.
+    TraceSettings resolvedTrace() const;
 };
 
 // Spins an entity about a local axis (scene animation for the app loop and velocity tests).

@@ -4,6 +4,9 @@
 //   module          reads                          publishes
 //   scene_upload    SceneFrameData (CPU)           SceneBuffers
 //   mesh_gbuffer    SceneBuffers, GBuffer, draws   (writes the GBuffer targets)
+//   sdf_scene       SdfSceneData (CPU)             SdfSceneBuffers
+//   sdf_trace       SceneBuffers, SdfSceneBuffers, (reads the mesh pass's depth, writes the GBuffer)
+//                   GBuffer
 //   lighting        SceneBuffers, GBuffer, Output  (writes Output)
 //   debug_view      SceneBuffers, GBuffer, Output  (writes Output instead of lighting)
 //
@@ -40,13 +43,14 @@ struct SceneBuffers {
 };
 
 // The G-buffer of one frame (renderer/scene_renderer.h documents the layout); albedo is invalid
-// when no material of the frame has a base-colour texture.
+// when no material of the frame has a base-colour texture, aux when the frame did not ask for it.
 struct GBuffer {
     fg::TextureRef depth;     // R32_FLOAT linear view depth
     fg::TextureRef normal;    // RG16_FLOAT octahedral world normal
     fg::TextureRef material;  // RGBA8_UNORM material index (16 bit) / shadow / AO
     fg::TextureRef velocity;  // RG16_FLOAT pixels
-    fg::TextureRef albedo;    // RGBA8_SRGB, optional
+    fg::TextureRef albedo;    // RGBA8_UNORM sRGB-encoded (gbuffer.glsl packAlbedo), optional
+    fg::TextureRef aux;       // RG32_FLOAT entity index / trace steps, optional (AOVs, debug views)
 };
 
 // The frame's colour output (RGBA8_UNORM with the sRGB OETF applied in the shader, or RGBA8_SRGB

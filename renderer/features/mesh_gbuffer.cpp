@@ -4,6 +4,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <string>
 
 #include <shaders/gbuffer_mesh.h>
 
@@ -16,7 +17,7 @@ namespace {
 
 namespace program = shaders::gbuffer_mesh;
 
-rhi::GraphicsPipelineDesc pipelineDesc(bool albedo) {
+rhi::GraphicsPipelineDesc pipelineDesc(bool albedo, bool aux) {
     rhi::GraphicsPipelineDesc d;
     d.vertexBuffers = {{sizeof(GpuVertex), false}};
     d.vertexAttributes = {{0, 0, rhi::Format::RGB32_FLOAT, offsetof(GpuVertex, position)},
@@ -30,9 +31,10 @@ rhi::GraphicsPipelineDesc pipelineDesc(bool albedo) {
     d.depthCompare = rhi::CompareOp::Less;
     d.colorFormats = {rhi::Format::R32_FLOAT, rhi::Format::RG16_FLOAT, rhi::Format::RGBA8_UNORM,
                       rhi::Format::RG16_FLOAT};
-    if (albedo) d.colorFormats.push_back(rhi::Format::RGBA8_SRGB);
+    if (albedo) d.colorFormats.push_back(rhi::Format::RGBA8_UNORM);
+    if (aux) d.colorFormats.push_back(rhi::Format::RG32_FLOAT);
     d.depthFormat = rhi::Format::D32_FLOAT;
-    d.debugName = albedo ? "gbuffer_mesh[Albedo]" : "gbuffer_mesh";
+    d.debugName = std::string("gbuffer_mesh") + (albedo ? "[Albedo]" : "") + (aux ? "[Aux]" : "");
     return d;
 }
 
@@ -54,11 +56,12 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
         std::vector<MeshDraw> draws;
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
-    const bool albedo = gbuffer.albedo.isValid();
-    const auto variant = albedo ? program::Variant::Albedo : program::Variant::Default;
+    const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
+    using V = program::Variant;
+    const V variant = aux ? (albedo ? V::AlbedoAux : V::Aux) : (albedo ? V::Albedo : V::Default);
     const rhi::ShaderDesc& vs = program::vertex(variant);
     const rhi::ShaderDesc& fs = program::fragment(variant);
-    const rhi::PipelineHandle pipeline = fc.cache.graphicsPipeline(vs, fs, pipelineDesc(albedo));
+    const rhi::PipelineHandle pipeline = fc.cache.graphicsPipeline(vs, fs, pipelineDesc(albedo, aux));
     rhi::SamplerDesc samplerDesc;
     samplerDesc.addressU = samplerDesc.addressV = samplerDesc.addressW = rhi::AddressMode::Repeat;
     const rhi::SamplerHandle sampler = albedo ? fc.cache.sampler(samplerDesc) : rhi::SamplerHandle{};
@@ -69,7 +72,8 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
             d.gb = gbuffer;
             d.scene = *fc.board.find<SceneBuffers>();
             d.draws = std::move(draws);
-            for (fg::TextureRef t : {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo})
+            for (fg::TextureRef t :
+                 {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo, d.gb.aux})
                 if (t.isValid()) b.write(t, rhi::Access::ColorTarget);
             d.depth = b.write(b.createTexture("depth", depthDesc), rhi::Access::DepthTargetWrite);
             b.read(d.scene.view, rhi::Access::UniformRead);
@@ -89,6 +93,9 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
                 cleared(ctx.texture(d.gb.material), {0, 0, 1, 1}),  // unshadowed, unoccluded
                 cleared(ctx.texture(d.gb.velocity), {0, 0, 0, 0})};
             if (albedo) rp.colorAttachments.push_back(cleared(ctx.texture(d.gb.albedo), {0, 0, 0, 0}));
+            if (d.gb.aux.isValid())
+                rp.colorAttachments.push_back(
+                    cleared(ctx.texture(d.gb.aux), {-1, 0, 0, 0}));  // background id
             rp.depthAttachment.texture = ctx.texture(d.depth);
             rp.depthAttachment.load = rhi::LoadOp::Clear;
             rp.depthAttachment.store = rhi::StoreOp::DontCare;

@@ -39,28 +39,13 @@ PENUMBRA_SAME_LAYOUT(GpuObject, shaders::gbuffer_mesh::Object, info);
 // vkCmdUpdateBuffer's limit per call; larger uploads are split.
 constexpr uint64_t kMaxUpdateBytes = 65536;
 
-template <typename T>
-uint64_t arrayBytes(const std::vector<T>& v) {
-    return uint64_t(std::max<size_t>(v.size(), 1)) * sizeof(T);
-}
+}  // namespace
 
 void updateChunked(rhi::CommandList& cmd, rhi::BufferHandle dst, const void* data, uint64_t size) {
     const auto* bytes = static_cast<const uint8_t*>(data);
     for (uint64_t offset = 0; offset < size; offset += kMaxUpdateBytes)
         cmd.updateBuffer(dst, offset, bytes + offset, std::min(kMaxUpdateBytes, size - offset));
 }
-
-template <typename T>
-void updateArray(rhi::CommandList& cmd, rhi::BufferHandle dst, const std::vector<T>& v) {
-    if (v.empty()) {
-        const T zero{};
-        updateChunked(cmd, dst, &zero, sizeof(T));
-    } else {
-        updateChunked(cmd, dst, v.data(), uint64_t(v.size()) * sizeof(T));
-    }
-}
-
-}  // namespace
 
 // ---- GPU asset cache ----------------------------------------------------------------------------
 

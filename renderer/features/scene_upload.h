@@ -5,9 +5,11 @@
 // the first time a frame needs it.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <unordered_map>
+#include <vector>
 
 #include "engine/assets/asset_manager.h"
 #include "renderer/features/frame_context.h"
@@ -65,6 +67,26 @@ private:
     std::unordered_map<assets::AssetId, GpuTexture> m_textures;
     rhi::TextureHandle m_white;
 };
+
+// Command-list buffer updates of any size (split into vkCmdUpdateBuffer-sized pieces).
+void updateChunked(rhi::CommandList& cmd, rhi::BufferHandle dst, const void* data, uint64_t size);
+
+// Bytes of a per-frame array buffer: at least one element, so that it can always be bound.
+template <typename T>
+uint64_t arrayBytes(const std::vector<T>& v) {
+    return uint64_t(std::max<size_t>(v.size(), 1)) * sizeof(T);
+}
+
+// Writes `v` (or one zero element when it is empty) at the start of `dst`.
+template <typename T>
+void updateArray(rhi::CommandList& cmd, rhi::BufferHandle dst, const std::vector<T>& v) {
+    if (v.empty()) {
+        const T zero{};
+        updateChunked(cmd, dst, &zero, sizeof(T));
+    } else {
+        updateChunked(cmd, dst, v.data(), uint64_t(v.size()) * sizeof(T));
+    }
+}
 
 // Adds the "scene_upload" pass and publishes SceneBuffers. `data` must stay alive and unchanged
 // until the graph has executed.

@@ -38,7 +38,7 @@ void main() {
             value = vec3(1.0 - clamp(depth / debugView.depthRange.x, 0.0, 1.0));
         } else {
 #ifdef ALBEDO
-            value = texelFetch(gbufferAlbedo, pixel, 0).rgb;
+            value = unpackAlbedo(texelFetch(gbufferAlbedo, pixel, 0));
 #else
             value = materials[unpackMaterialIndex(texelFetch(gbufferMaterial, pixel, 0))].baseColor.rgb;
 #endif

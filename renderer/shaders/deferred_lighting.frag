@@ -37,7 +37,7 @@ void main() {
         vec4 packed = texelFetch(gbufferMaterial, pixel, 0);
         Material m = materials[unpackMaterialIndex(packed)];
 #ifdef ALBEDO
-        vec3 baseColor = texelFetch(gbufferAlbedo, pixel, 0).rgb;
+        vec3 baseColor = unpackAlbedo(texelFetch(gbufferAlbedo, pixel, 0));
 #else
         vec3 baseColor = m.baseColor.rgb;
 #endif

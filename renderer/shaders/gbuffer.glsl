@@ -4,6 +4,9 @@
 //   material  RGBA8_UNORM  r, g = 16-bit material index (low byte, high byte) / 255,
 //                          b = shadow, a = AO
 //   velocity  RG16_FLOAT   pixels moved since the previous frame (current - previous)
+//   albedo    RGBA8_UNORM  optional: base colour, sRGB-encoded by packAlbedo (a UNORM target so the
+//                          compute trace can write it as a storage image)
+//   aux       RG32_FLOAT   optional: x entity index (-1 background), y sphere-trace steps
 // The C++ octEncode / octDecode (renderer/core/gbuffer_encoding.h) are the same functions.
 
 vec2 octSignNotZero(vec2 v) { return vec2(v.x >= 0.0 ? 1.0 : -1.0, v.y >= 0.0 ? 1.0 : -1.0); }
@@ -29,3 +32,13 @@ vec4 packMaterial(uint index, float shadow, float ao) {
 }
 
 uint unpackMaterialIndex(vec4 m) { return uint(m.r * 255.0 + 0.5) | (uint(m.g * 255.0 + 0.5) << 8u); }
+
+// Albedo (linear base colour) <-> the RGBA8_UNORM albedo target with the exact sRGB transfer
+// functions (IEC 61966-2-1), as an RGBA8_SRGB target would store it.
+float albedoEncode(float c) {
+    c = clamp(c, 0.0, 1.0);
+    return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+}
+float albedoDecode(float e) { return e <= 0.04045 ? e / 12.92 : pow((e + 0.055) / 1.055, 2.4); }
+vec4 packAlbedo(vec3 c) { return vec4(albedoEncode(c.r), albedoEncode(c.g), albedoEncode(c.b), 1.0); }
+vec3 unpackAlbedo(vec4 e) { return vec3(albedoDecode(e.r), albedoDecode(e.g), albedoDecode(e.b)); }

@@ -1,7 +1,8 @@
 // gbuffer_mesh, fragment stage. Variant ALBEDO also writes the albedo target: the material's base
 // colour times its base-colour texture (a 1x1 white texture is bound for materials without one).
+// Variant AUX also writes the aux target: the entity index and 0 trace steps.
 #version 450
-#pragma penumbra_variants ALBEDO
+#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX
 #include "scene.glsl"
 #include "gbuffer.glsl"
 
@@ -16,6 +17,7 @@ layout(location = 2) in vec4 vClip;
 layout(location = 3) in vec4 vPrevClip;
 layout(location = 4) in vec2 vUv;
 layout(location = 5) flat in uint vMaterial;
+layout(location = 6) flat in uint vEntity;
 
 layout(location = 0) out float outDepth;
 layout(location = 1) out vec2 outNormal;
@@ -23,6 +25,11 @@ layout(location = 2) out vec4 outMaterial;
 layout(location = 3) out vec2 outVelocity;
 #ifdef ALBEDO
 layout(location = 4) out vec4 outAlbedo;
+#endif
+#if defined(AUX) && defined(ALBEDO)
+layout(location = 5) out vec2 outAux;
+#elif defined(AUX)
+layout(location = 4) out vec2 outAux;
 #endif
 
 // Clip position -> pixel coordinates (x right, y down from the top row, pixel centres at +0.5).
@@ -37,6 +44,9 @@ void main() {
     outVelocity = vPrevClip.w > 1e-6 ? clipToPixel(vClip) - clipToPixel(vPrevClip) : vec2(0.0);
 #ifdef ALBEDO
     Material m = materials[vMaterial];
-    outAlbedo = vec4(m.baseColor.rgb * texture(baseColorTexture, vUv).rgb, 1.0);
+    outAlbedo = packAlbedo(m.baseColor.rgb * texture(baseColorTexture, vUv).rgb);
+#endif
+#ifdef AUX
+    outAux = vec2(float(vEntity), 0.0);
 #endif
 }

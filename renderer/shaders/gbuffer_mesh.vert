@@ -19,6 +19,7 @@ layout(location = 2) out vec4 vClip;
 layout(location = 3) out vec4 vPrevClip;
 layout(location = 4) out vec2 vUv;
 layout(location = 5) flat out uint vMaterial;
+layout(location = 6) flat out uint vEntity;
 
 void main() {
     Object o = objects[draw.object.x];
@@ -31,5 +32,6 @@ void main() {
     vPrevClip = view.prevViewProj * prevWorld;
     vUv = inUv;
     vMaterial = o.info.x;
+    vEntity = o.info.y;
     gl_Position = vClip;
 }

@@ -108,6 +108,9 @@ bool storageFormat(spv::ImageFormat format, rhi::Format& out) {
         case spv::ImageFormatRg16f:
             out = rhi::Format::RG16_FLOAT;
             return true;
+        case spv::ImageFormatRg32f:
+            out = rhi::Format::RG32_FLOAT;
+            return true;
         case spv::ImageFormatR32ui:
             out = rhi::Format::R32_UINT;
             return true;
@@ -244,7 +247,7 @@ bool reflectStage(StageOutput& stage, std::vector<std::string>& diagnostics) {
             if (!storageFormat(type.image.format, b.storageFormat)) {
                 diagnostics.push_back(where(stage) + ": error: storage image '" + b.name +
                                       "' needs a format layout qualifier the RHI supports (rgba8, rgba16f, "
-                                      "rgba32f, r32f, r16f, rg16f, r32ui, r8ui, r8)");
+                                      "rgba32f, r32f, r16f, rg16f, rg32f, r32ui, r8ui, r8)");
                 ok = false;
                 continue;
             }

@@ -1,0 +1,68 @@
+// Feature "sdf_scene": the frame's SDF objects on the GPU (renderer/shaders/sdf_scene.glsl is the
+// shader side). The pass "sdf_upload" (Transfer) writes the per-object array and the shape-program
+// records of this frame into frame-graph buffers and publishes them, with the field atlas of
+// renderer/features/sdf_atlas.h (when a field is in the frame), as SdfSceneBuffers.
+//
+// Per object (GpuSdfObject, 256 bytes): world <-> local matrices, the previous model (velocity),
+// the local bounds of its solid, sigma_min (the smallest singular value of the model's 3x3 part:
+// the conservative world / local distance ratio), kind, record or atlas slot, material and entity
+// index, and its step limit. Objects sharing a shape program share its records (instancing): the
+// records array holds each program once.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/mat3x3.hpp>
+#include <glm/mat4x4.hpp>
+#include <glm/vec4.hpp>
+
+#include "engine/sdf/shape_program.h"
+#include "renderer/features/frame_context.h"
+
+namespace penumbra::render {
+
+enum class SdfKind : uint32_t { Shapes = 0, Field = 1 };
+
+struct GpuSdfObject {
+    glm::mat4 worldToLocal;
+    glm::mat4 model;
+    glm::mat4 prevModel;
+    glm::vec4 boundsMin;  // xyz local bounds (+-1e30 when unbounded), w sigma_min of model
+    glm::vec4 boundsMax;
+    glm::uvec4 info;    // x kind, y first record / atlas slot, z material index, w entity index
+    glm::uvec4 params;  // x step limit (0: the pass setting)
+};
+static_assert(sizeof(GpuSdfObject) == 256);
+
+// Largest magnitude stored for unbounded bounds (the shaders' slab test stays finite).
+inline constexpr float kSdfUnbounded = 1.0e30f;
+
+// This frame's SDF data; `atlas` and `fields` only when a field object is in the frame.
+struct SdfSceneData {
+    std::vector<GpuSdfObject> objects;
+    std::vector<sdf::ShapeInstruction> records;  // every program used, each header + instructions
+    const void* fields = nullptr;                // GpuSdfField[fieldCount] (the atlas' slot table)
+    uint64_t fieldBytes = 0;
+    rhi::TextureHandle atlas;
+    bool hasFields() const { return atlas.value != 0; }
+};
+
+struct SdfSceneBuffers {
+    fg::BufferRef objects;  // GpuSdfObject[]
+    fg::BufferRef records;  // sdf::ShapeInstruction[] (>= 1 record)
+    fg::BufferRef fields;   // GpuSdfField[] (field frames only)
+    fg::TextureRef atlas;   // R16F 3D atlas (field frames only)
+    uint32_t objectCount = 0;
+    uint64_t bytes = 0;  // buffer bytes
+};
+
+// The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi
+// rotations and rounded down: the world distance is at least this times the local distance.
+float smallestSingularValue(const glm::mat3& m);
+
+// Adds the "sdf_upload" pass and publishes SdfSceneBuffers. `data` must stay alive and unchanged
+// until the graph has executed.
+void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data);
+
+}  // namespace penumbra::render

@@ -1,0 +1,78 @@
+#include "renderer/features/sdf_trace.h"
+
+#include <shaders/sdf_trace.h>
+
+#include "renderer/core/shader_params.h"
+#include "renderer/features/sdf_scene.h"
+
+namespace penumbra::render {
+
+void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
+    namespace program = shaders::sdf_trace;
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        GBuffer gb;
+    };
+    const GBuffer& gbuffer = *fc.board.find<GBuffer>();
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
+    const bool fields = sdfScene.atlas.isValid();
+    using V = program::Variant;
+    static constexpr V kVariants[4] = {V::Default, V::Albedo, V::Aux, V::AlbedoAux};
+    const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0)];
+    const rhi::ShaderDesc& cs = program::compute(variant);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    rhi::SamplerDesc linear;  // trilinear field sampling, clamped (slots are sampled inside)
+    linear.debugName = "sdf.atlas";
+    const rhi::SamplerHandle sampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const scene::TraceSettings& s = desc.settings;
+    const program::PushConstants push{
+        glm::uvec4(sdfScene.objectCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
+        glm::vec4(s.hitEpsilon, s.normalEpsilon, s.overRelaxation, s.fieldSafety),
+        glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f)};
+    const uint32_t width = fc.width, height = fc.height;
+    fc.graph.addPass<Data>(
+        "sdf_trace", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.gb = gbuffer;
+            const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
+            for (fg::TextureRef t :
+                 {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo, d.gb.aux})
+                if (t.isValid()) b.write(t, rw);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
+            b.read(d.sdf.objects, rhi::Access::ShaderRead);
+            b.read(d.sdf.records, rhi::Access::ShaderRead);
+            if (fields) {
+                b.read(d.sdf.fields, rhi::Access::ShaderRead);
+                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
+            }
+        },
+        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, fields](
+            const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("SdfObjects", ctx.buffer(d.sdf.objects))
+                .set("ShapeRecords", ctx.buffer(d.sdf.records))
+                .setStorage("gbufferDepthImage", ctx.texture(d.gb.depth))
+                .setStorage("gbufferNormalImage", ctx.texture(d.gb.normal))
+                .setStorage("gbufferMaterialImage", ctx.texture(d.gb.material))
+                .setStorage("gbufferVelocityImage", ctx.texture(d.gb.velocity));
+            if (albedo)
+                params.set("Materials", ctx.buffer(d.scene.materials))
+                    .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
+            if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
+            if (fields)
+                params.set("SdfFields", ctx.buffer(d.sdf.fields))
+                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), sampler);
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            dispatchOver(ctx.cmd, cs, width, height);
+        });
+}
+
+}  // namespace penumbra::render

@@ -1,0 +1,42 @@
+// Feature "sdf_trace": the compute pass "sdf_trace" that sphere-traces every SDF object of the
+// frame (SdfSceneBuffers, renderer/features/sdf_scene.h) into the G-buffer, one invocation per pixel
+// (renderer/shaders/sdf_trace.comp describes the algorithm step by step).
+//
+// Hybrid rendering: when the mesh pass ran first, the trace reads its linear depth and ends every
+// ray there, and writes only the pixels where an SDF is nearer; otherwise it writes every pixel
+// (the G-buffer's "nothing hit" values where nothing is hit). Either way the G-buffer holds the
+// nearest surface of meshes and SDFs with their own depth, normal, material, velocity (and albedo,
+// aux when the frame has them).
+//
+// Settings (scene::TraceSettings; --quality low|medium|high|reference presets, each overridable in
+// the scene's render block):
+//   maxSteps        step limit per ray; an object's own maxSteps raises it for rays crossing it
+//   hitEpsilon      hit when d < hitEpsilon * footprint(t), footprint(t) = the size of one pixel at
+//                   distance t (2 t / (height * proj[1][1])): coarse where a pixel is coarse
+//   normalEpsilon   the gradient's central-difference step, in the same footprints (at least 1e-5
+//                   of the point's distance from the origin, for float precision)
+//   overRelaxation  Keinert's omega; a step whose unbounding spheres do not overlap the previous
+//                   one is taken back (safe fallback) and omega drops to 1 for the rest of the ray
+//   fieldSafety     times the trilinear interpolation bound subtracted from field distances: 1
+//                   never steps through the baked surface, 0 trusts the interpolated value
+//   refineSteps     after a hit, plain steps (each at most one voxel) on the raw field value
+#pragma once
+
+#include "engine/scene/scene.h"
+#include "renderer/features/frame_context.h"
+
+namespace penumbra::render {
+
+struct SdfTraceDesc {
+    scene::TraceSettings settings;
+    bool raster = false;       // the mesh pass wrote the G-buffer first (bounded trace)
+    float nearPlane = 0.1f;    // linear depth where rays start
+    float farPlane = 1000.0f;  // linear depth where rays end when no mesh is nearer
+    float footprint = 0.0f;    // pixel size per unit distance: 2 / (height * proj[1][1])
+};
+
+// Adds the pass. Reads SceneBuffers (view; materials when the frame has albedo) and
+// SdfSceneBuffers; reads and writes the GBuffer as storage images.
+void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc);
+
+}  // namespace penumbra::render

@@ -1,0 +1,92 @@
+// The SDF objects of a frame as the shaders see them (renderer/features/sdf_scene.h holds the C++
+// side): one SdfObject per traced entity, the shape-program records they point into, and (variant
+// SDF_FIELDS) the field atlas. The same distance code serves the trace, the debug views and, later,
+// shadows and AO.
+//
+// Use: define SDF_SCENE_SET, SDF_OBJECTS_BINDING and SHAPE_RECORDS_BINDING (and with SDF_FIELDS
+// also SDF_FIELDS_BINDING and SDF_ATLAS_BINDING), then include this file.
+//
+// Distances are conservative: an object's world distance is its local (field or program) distance
+// times the smallest singular value of its model matrix's 3x3 part (boundsMin.w), which is exact
+// for rotation, translation and uniform scale and never an overestimate under non-uniform scale
+// (the image of a local ball of radius r contains the world ball of radius sigma_min * r). Field
+// distances subtract fieldSafety times the trilinear interpolation bound (sdf_field.glsl), so with
+// fieldSafety = 1 a traced ray never steps through the surface of the baked mesh.
+#ifndef PENUMBRA_SDF_SCENE_GLSL
+#define PENUMBRA_SDF_SCENE_GLSL
+
+struct SdfObject {
+    mat4 worldToLocal;  // inverse of model
+    mat4 model;         // local (program / field space) -> world
+    mat4 prevModel;     // the previous frame's model matrix (velocity)
+    vec4 boundsMin;     // xyz local bounds of the solid (+-1e30 when unbounded), w sigma_min of model
+    vec4 boundsMax;     // xyz local bounds, w unused
+    uvec4 info;         // x kind (SDF_KIND_*), y first record (shapes) / atlas slot (field),
+                        // z material index, w entity index
+    uvec4 params;       // x this object's step limit (0: the pass setting)
+};
+
+const uint SDF_KIND_SHAPES = 0u;
+const uint SDF_KIND_FIELD = 1u;
+
+layout(set = SDF_SCENE_SET, binding = SDF_OBJECTS_BINDING, std430) readonly buffer SdfObjects {
+    SdfObject sdfObjects[];
+};
+
+#define SHAPE_RECORDS_SET SDF_SCENE_SET
+#include "shape_program.glsl"
+
+#ifdef SDF_FIELDS
+#define SDF_FIELDS_SET SDF_SCENE_SET
+#include "sdf_field.glsl"
+#endif
+
+vec3 sdfToLocal(uint object, vec3 world) { return (sdfObjects[object].worldToLocal * vec4(world, 1.0)).xyz; }
+
+// World-space lower bound of the distance from a point (local position pl) to the object's solid:
+// the distance to its local bounds box, scaled; 0 inside the box.
+float sdfBoxDistance(uint object, vec3 pl) {
+    vec3 q = max(sdfObjects[object].boundsMin.xyz - pl, pl - sdfObjects[object].boundsMax.xyz);
+    return length(max(q, vec3(0.0))) * sdfObjects[object].boundsMin.w;
+}
+
+// Signed distance in the object's local units at local position pl.
+float sdfLocalDistance(uint object, vec3 pl, float fieldSafety) {
+    uvec4 info = sdfObjects[object].info;
+    if (info.x == SDF_KIND_SHAPES) return evalShapeProgram(info.y, pl);
+#ifdef SDF_FIELDS
+    return sdfFieldDistance(info.y, pl) - fieldSafety * sdfFieldInterpolationBound(info.y, pl);
+#else
+    return SHAPE_FAR;
+#endif
+}
+
+// Conservative signed world distance of one object at world position pw.
+float sdfObjectDistance(uint object, vec3 pw, float fieldSafety) {
+    return sdfObjects[object].boundsMin.w * sdfLocalDistance(object, sdfToLocal(object, pw), fieldSafety);
+}
+
+// The object's voxel size in world units (0 for analytic shapes).
+float sdfObjectVoxel(uint object) {
+#ifdef SDF_FIELDS
+    uvec4 info = sdfObjects[object].info;
+    if (info.x == SDF_KIND_FIELD) return sdfFieldVoxelSize(info.y) * sdfObjects[object].boundsMin.w;
+#endif
+    return 0.0;
+}
+
+// The world ray o + t d (d unit) against the object's local bounds box: [enter, exit] in t, empty
+// (enter > exit) when the ray misses it. Affine maps keep the ray parameter, so the local ray is
+// (W o) + t (W d) with the same t.
+vec2 sdfRayInterval(uint object, vec3 o, vec3 d) {
+    mat4 w = sdfObjects[object].worldToLocal;
+    vec3 lo = (w * vec4(o, 1.0)).xyz;
+    vec3 ld = mat3(w) * d;
+    vec3 inv = 1.0 / mix(ld, vec3(1e-30), lessThan(abs(ld), vec3(1e-30)));
+    vec3 t0 = (sdfObjects[object].boundsMin.xyz - lo) * inv;
+    vec3 t1 = (sdfObjects[object].boundsMax.xyz - lo) * inv;
+    vec3 tn = min(t0, t1), tf = max(t0, t1);
+    return vec2(max(max(tn.x, tn.y), tn.z), min(min(tf.x, tf.y), tf.z));
+}
+
+#endif

@@ -1,0 +1,237 @@
+// sdf_trace: full-screen sphere tracing of the frame's SDF objects into the G-buffer
+// (renderer/features/sdf_trace.h documents the settings, renderer/scene_renderer.h the G-buffer).
+// One invocation per pixel:
+//  1. the camera ray through the pixel centre; its interval ends at the rasterized depth when a mesh
+//     pass ran (RASTER flag: the trace is bounded by the raster depth, so meshes and SDFs occlude
+//     each other correctly), else at the far plane;
+//  2. culling: every object's local bounds box is intersected with the ray; objects it misses are
+//     never evaluated, and an object is dropped once the ray has left its box. Up to
+//     kListSize objects are kept in a per-pixel list; a ray crossing more boxes traces the rest
+//     from the full object array (correct, slower);
+//  3. sphere tracing with over-relaxation (Keinert et al. 2014): steps of omega * d while the
+//     unbounding spheres of consecutive points overlap; when they do not, the step returns to the
+//     previous point plus its plain (safe) step and omega becomes 1 for the rest of the ray;
+//  4. a hit is d < hitEpsilon pixel footprints at the current distance; if the step limit runs out,
+//     the point with the smallest d / t (screen-space error) is kept when that error is within 4x
+//     the hit threshold (Keinert's hit selection), else the pixel is a miss;
+//  5. refinement: up to refineSteps plain steps on the raw field value (no interpolation safety),
+//     each at most one voxel, land the hit on the interpolated surface instead of in front of it;
+//  6. the normal is the gradient of the hit object's world distance by central differences over
+//     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
+//     distance from the origin, for float precision); velocity from the object's previous model.
+#version 450
+#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX
+layout(local_size_x = 8, local_size_y = 8) in;
+
+#include "scene.glsl"
+#include "gbuffer.glsl"
+
+#define SDF_SCENE_SET 2
+#define SDF_OBJECTS_BINDING 6
+#define SHAPE_RECORDS_BINDING 7
+#define SDF_FIELDS_BINDING 8
+#define SDF_ATLAS_BINDING 9
+#include "sdf_scene.glsl"
+
+layout(set = 2, binding = 0, r32f) uniform image2D gbufferDepthImage;
+layout(set = 2, binding = 1, rg16f) uniform image2D gbufferNormalImage;
+layout(set = 2, binding = 2, rgba8) uniform image2D gbufferMaterialImage;
+layout(set = 2, binding = 3, rg16f) uniform image2D gbufferVelocityImage;
+#ifdef ALBEDO
+SCENE_MATERIALS;
+layout(set = 2, binding = 4, rgba8) uniform writeonly image2D gbufferAlbedoImage;
+#endif
+#ifdef AUX
+layout(set = 2, binding = 5, rg32f) uniform image2D gbufferAuxImage;
+#endif
+
+layout(push_constant) uniform SdfTrace {
+    uvec4 counts;    // x objects, y flags (1 = a raster pass wrote the G-buffer), z step limit, w refine steps
+    vec4 epsilons;   // x hit epsilon, y normal epsilon (pixel footprints), z over-relaxation omega,
+                     // w field safety factor
+    vec4 clip;       // x near, y far (linear depth), z pixel footprint per unit of distance
+} trace;
+
+const uint kRasterFlag = 1u;
+const int kListSize = 24;
+
+uint g_list[kListSize];
+vec2 g_interval[kListSize];
+int g_count;
+bool g_overflow;
+
+// Distance to the nearest object at ray parameter t (world point p); `nearest` is its object.
+// Objects whose box the ray has left are skipped, and an object whose box is farther than the
+// best distance so far is not evaluated. (Each call site of the distance code is inlined by the
+// compiler, so the shader keeps few of them: this loop, the normal's and the refinement's.)
+float sceneDistance(vec3 p, float t, float safety, out uint nearest) {
+    float d = 3.0e38;
+    nearest = 0xffffffffu;
+    int count = g_overflow ? int(trace.counts.x) : g_count;
+    for (int i = 0; i < count; ++i) {
+        if (!g_overflow && t > g_interval[i].y) continue;  // the ray has left this box for good
+        uint obj = g_overflow ? uint(i) : g_list[i];
+        vec3 pl = sdfToLocal(obj, p);
+        if (sdfBoxDistance(obj, pl) >= d) continue;  // cannot be nearer than the best so far
+        float di = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, safety);
+        if (di < d) {
+            d = di;
+            nearest = obj;
+        }
+    }
+    return d;
+}
+
+// The gradient of the object's world distance over a tetrahedron of offsets h (4 evaluations).
+vec3 objectNormal(uint obj, vec3 p, float h) {
+    vec3 g = vec3(0.0);
+    for (int i = 0; i < 4; ++i) {
+        vec3 k = vec3((i == 0 || i == 3) ? 1.0 : -1.0, (i == 2 || i == 3) ? 1.0 : -1.0,
+                      (i == 1 || i == 3) ? 1.0 : -1.0);
+        g += k * sdfObjectDistance(obj, p + k * h, 0.0);
+    }
+    return normalize(g);
+}
+
+vec2 clipToPixel(vec4 clip) { return (clip.xy / clip.w * 0.5 + 0.5) * view.viewport.xy; }
+
+void main() {
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (pixel.x >= int(view.viewport.x) || pixel.y >= int(view.viewport.y)) return;
+    bool raster = (trace.counts.y & kRasterFlag) != 0u;
+
+    // The ray through the pixel centre; dir has unit component along the view direction, so the
+    // linear depth of a point at ray parameter t (unit direction) is t / |dir|.
+    vec2 ndc = (vec2(pixel) + 0.5) * view.viewport.zw * 2.0 - 1.0;
+    vec3 dir = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
+    float dirLength = length(dir);
+    vec3 rd = dir / dirLength;
+    vec3 ro = view.position.xyz;
+
+    float rasterDepth = raster ? imageLoad(gbufferDepthImage, pixel).r : 0.0;
+    float tMin = trace.clip.x * dirLength;
+    float tMax = (rasterDepth > 0.0 ? rasterDepth : trace.clip.y) * dirLength;
+
+    // Culling by the objects' bounds.
+    g_count = 0;
+    g_overflow = false;
+    float tStart = tMax;
+    uint stepLimit = trace.counts.z;
+    for (uint obj = 0u; obj < trace.counts.x; ++obj) {
+        vec2 iv = sdfRayInterval(obj, ro, rd);
+        if (iv.x > iv.y || iv.y < tMin || iv.x > tMax) continue;
+        tStart = min(tStart, max(iv.x, tMin));
+        stepLimit = max(stepLimit, sdfObjects[obj].params.x);
+        if (g_count < kListSize) {
+            g_list[g_count] = obj;
+            g_interval[g_count] = iv;
+            ++g_count;
+        } else {
+            g_overflow = true;
+        }
+    }
+
+    float safety = trace.epsilons.w;
+    float footprint = trace.clip.z;
+    uint steps = 0u;
+    bool hit = false;
+    uint hitObject = 0xffffffffu;
+    float t = tStart;
+    if (g_count > 0 || g_overflow) {
+        float omega = trace.epsilons.z;
+        float prevRadius = 0.0, stepLength = 0.0, prevT = t;
+        float bestError = 3.0e38, bestT = t;
+        uint bestObject = 0xffffffffu;
+        for (; steps < stepLimit && t <= tMax; ++steps) {
+            uint nearest;
+            float d = sceneDistance(ro + rd * t, t, safety, nearest);
+            float radius = abs(d);
+            bool sorFail = omega > 1.0 && radius + prevRadius < stepLength;
+            if (sorFail) {
+                // The spheres do not overlap: the over-relaxed step may have skipped a surface.
+                // Back to the previous point, plain step from there, no more over-relaxation.
+                t = prevT + prevRadius;
+                stepLength = prevRadius;
+                omega = 1.0;
+                prevT = t;
+                continue;
+            }
+            float eps = max(trace.epsilons.x * footprint * t, 1e-6 * t);
+            if (d < eps) {
+                hit = true;
+                hitObject = nearest;
+                break;
+            }
+            float err = d / max(t, 1e-6);
+            if (err < bestError) {
+                bestError = err;
+                bestT = t;
+                bestObject = nearest;
+            }
+            prevRadius = radius;
+            prevT = t;
+            stepLength = omega * d;
+            t += stepLength;
+        }
+        if (!hit && steps >= stepLimit && bestObject != 0xffffffffu &&
+            bestError <= 4.0 * trace.epsilons.x * footprint && bestT <= tMax) {
+            hit = true;
+            t = bestT;
+            hitObject = bestObject;
+        }
+        if (hit) {
+            // Refinement onto the raw (interpolated) surface of the hit object.
+            float voxel = sdfObjectVoxel(hitObject);
+            float limit = voxel > 0.0 ? voxel : 3.0e38;
+            for (uint r = 0u; r < trace.counts.w; ++r) {
+                float d = sdfObjectDistance(hitObject, ro + rd * t, 0.0);
+                float eps = 1e-6 * t;
+                if (abs(d) <= eps) break;
+                t += clamp(d, -limit, limit);
+            }
+            t = max(t, tMin);
+            hit = t <= tMax;
+        }
+    }
+
+    vec3 p = ro + rd * t;
+    if (hit) {
+        float h = max(trace.epsilons.y * footprint * t, 1e-5 * max(length(p), 1.0));
+        vec3 n = objectNormal(hitObject, p, h);
+        if (any(isnan(n))) n = -rd;
+        uvec4 info = sdfObjects[hitObject].info;
+        imageStore(gbufferDepthImage, pixel, vec4(t / dirLength));
+        imageStore(gbufferNormalImage, pixel, vec4(octEncode(n), 0.0, 0.0));
+        imageStore(gbufferMaterialImage, pixel, packMaterial(info.z, 1.0, 1.0));
+        vec3 local = sdfToLocal(hitObject, p);
+        vec4 prevClip = view.prevViewProj * (sdfObjects[hitObject].prevModel * vec4(local, 1.0));
+        vec4 clip = view.viewProj * vec4(p, 1.0);
+        vec2 velocity = prevClip.w > 1e-6 ? clipToPixel(clip) - clipToPixel(prevClip) : vec2(0.0);
+        imageStore(gbufferVelocityImage, pixel, vec4(velocity, 0.0, 0.0));
+#ifdef ALBEDO
+        imageStore(gbufferAlbedoImage, pixel, packAlbedo(materials[info.z].baseColor.rgb));
+#endif
+#ifdef AUX
+        imageStore(gbufferAuxImage, pixel, vec4(float(info.w), float(steps), 0.0, 0.0));
+#endif
+    } else if (!raster) {
+        // Nothing else wrote this pixel this frame: the G-buffer's "nothing hit" values.
+        imageStore(gbufferDepthImage, pixel, vec4(0.0));
+        imageStore(gbufferNormalImage, pixel, vec4(0.0));
+        imageStore(gbufferMaterialImage, pixel, vec4(0.0, 0.0, 1.0, 1.0));
+        imageStore(gbufferVelocityImage, pixel, vec4(0.0));
+#ifdef ALBEDO
+        imageStore(gbufferAlbedoImage, pixel, vec4(0.0));
+#endif
+#ifdef AUX
+        imageStore(gbufferAuxImage, pixel, vec4(-1.0, float(steps), 0.0, 0.0));
+#endif
+    }
+#ifdef AUX
+    else {
+        // A mesh pixel or the background behind a mesh pass: keep the id the mesh pass wrote, add
+        // the steps this ray took.
+        imageStore(gbufferAuxImage, pixel, vec4(imageLoad(gbufferAuxImage, pixel).x, float(steps), 0.0, 0.0));
+    }
+#endif
+}
