@@ -1,11 +1,13 @@
 // The asset manager: stable ids, reference counts, the processed-mesh disk cache (.pmesh, layout in
-// docs/FORMATS.md "Processed-mesh cache (.pmesh)"), normal generation and mesh validation.
+// docs/FORMATS.md "Processed-mesh cache (.pmesh)"), baked SDF fields and their .psdf cache (bakeSdf),
+// normal generation and mesh validation.
 #include "engine/assets/asset_manager.h"
 
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -18,6 +20,7 @@
 
 #include "engine/assets/mesh_internal.h"
 #include "engine/core/log.h"
+#include "engine/core/progress.h"
 
 namespace penumbra::assets {
 
@@ -785,6 +788,165 @@ AssetId AssetManager::loadPsdf(const std::string& path, std::string& error) {
     const uint64_t size = field->grid.distances.size() * sizeof(float);
     const AssetId result = insert(AssetKind::SdfField, key, path, std::move(field), size);
     if (result == 0) error = fmt::format("{}: asset id collision", path);
+    return result;
+}
+
+namespace {
+
+const char* bakeQualityName(sdf::BakeQuality q) {
+    switch (q) {
+        case sdf::BakeQuality::Low:
+            return "low";
+        case sdf::BakeQuality::Medium:
+            return "medium";
+        case sdf::BakeQuality::High:
+            return "high";
+    }
+    return "medium";
+}
+
+sdf::PsdfSign psdfSignOf(sdf::SignMethod m) {
+    switch (m) {
+        case sdf::SignMethod::Winding:
+            return sdf::PsdfSign::Winding;
+        case sdf::SignMethod::Pseudonormal:
+            return sdf::PsdfSign::Pseudonormal;
+        case sdf::SignMethod::Parity:
+            return sdf::PsdfSign::Parity;
+        case sdf::SignMethod::Auto:
+            break;
+    }
+    return sdf::PsdfSign::Unknown;
+}
+
+// Bumped whenever the baker's output for the same mesh and settings changes, so older cache files
+// are never read (their names no longer match).
+constexpr int kSdfBakeCacheVersion = 1;
+
+// The largest .psdf the reader accepts (2^30 voxels of 4 bytes, plus the header).
+constexpr uint64_t kMaxPsdfFileBytes = uint64_t(1) << 33;
+
+}  // namespace
+
+std::string AssetManager::bakeSettingsKey(const sdf::BakeSettings& settings) {
+    return fmt::format("v{}:res={}:vs={:.17g}:pad={}:sign={}:q={}:flip={}", kSdfBakeCacheVersion,
+                       settings.resolution, settings.resolution ? 0.0 : settings.voxelSize, settings.padding,
+                       sdf::toString(settings.sign), bakeQualityName(settings.quality),
+                       settings.flipInsideOut ? 1 : 0);
+}
+
+AssetId AssetManager::bakeSdf(AssetId meshId, const sdf::BakeSettings& settings, std::string& error) {
+    const Entry* meshEntry = find(meshId);
+    if (!meshEntry || meshEntry->info.kind != AssetKind::Mesh) {
+        error = meshEntry ? fmt::format("bakeSdf: asset {:016x} is a {}, not a mesh", meshId,
+                                        assetKindName(meshEntry->info.kind))
+                          : fmt::format("bakeSdf: unknown mesh asset {:016x}", meshId);
+        return 0;
+    }
+    const MeshData& mesh = *static_cast<const MeshData*>(meshEntry->data.get());
+    const std::string what = meshEntry->info.sourcePath.empty()
+                                 ? fmt::format("mesh '{}'", meshEntry->info.key)
+                                 : meshEntry->info.sourcePath;
+    const std::string key = fmt::format("bake:{}:{}", meshEntry->info.key, bakeSettingsKey(settings));
+    const AssetId id = stableId(AssetKind::SdfField, key);
+    if (Entry* existing = find(id);
+        existing && existing->info.kind == AssetKind::SdfField && existing->info.key == key) {
+        ++existing->info.refCount;
+        return id;
+    }
+    const std::string sourcePath = meshEntry->info.sourcePath;
+
+    auto field = std::make_shared<sdf::PsdfAsset>();
+    bool fromCache = false;
+    std::string cacheFile;
+    if (!m_desc.cacheDir.empty()) {
+        // The name covers the geometry too: in-memory mesh keys are chosen by callers.
+        const std::string geometry =
+            contentHash(mesh.positions.data(), mesh.positions.size() * sizeof(glm::vec3)) +
+            contentHash(mesh.indices.data(), mesh.indices.size() * sizeof(uint32_t));
+        const std::string nameKey = key + "\n" + geometry;
+        cacheFile =
+            (fs::path(m_desc.cacheDir) / "sdf" / (contentHash(nameKey.data(), nameKey.size()) + ".psdf"))
+                .string();
+        std::error_code ec;
+        if (fs::exists(cacheFile, ec)) {
+            std::string why;
+            detail::FileBytes cached;
+            bool ok = detail::readWholeFile(cacheFile, kMaxPsdfFileBytes, cached, why) &&
+                      sdf::decodePsdf(reinterpret_cast<const uint8_t*>(cached.data()), cached.size(),
+                                      cacheFile, *field, why);
+            if (ok && field->header.encoding != sdf::PsdfEncoding::F32) {
+                why = fmt::format("encoding {} (the bake cache writes f32)",
+                                  sdf::toString(field->header.encoding));
+                ok = false;
+            }
+            if (ok) {
+                fromCache = true;
+                ++m_cacheStats.sdfHits;
+            } else {
+                log::warn("sdf bake cache file {} rejected ({}); deleting it and baking {} again", cacheFile,
+                          why, what);
+                fs::remove(cacheFile, ec);
+                ++m_cacheStats.sdfRejected;
+                *field = sdf::PsdfAsset{};
+            }
+        } else {
+            ++m_cacheStats.sdfMisses;
+        }
+    }
+    if (!fromCache) {
+        sdf::BakeSettings run = settings;
+        StderrProgressOutput progressOut;
+        ProgressBar bar(progressOut);
+        if (!run.progress)
+            run.progress = [&bar](double fraction, const char* phase) { bar.update(fraction, phase); };
+        const auto t0 = std::chrono::steady_clock::now();
+        sdf::BakeResult result = sdf::bake(mesh, run);
+        bar.finish();
+        ++m_cacheStats.sdfBakes;
+        if (!result.ok) {
+            error = fmt::format("cannot bake the SDF of {}: {}", what, result.error);
+            return 0;
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        if (seconds >= 1.0) {
+            log::info("baked the SDF of {}: {} x {} x {} voxels in {:.1f} s", what, result.grid.dims.x,
+                      result.grid.dims.y, result.grid.dims.z, seconds);
+        }
+        // The asset is the decoded image of the F32 file, so a cached load gives the same asset.
+        const sdf::MeshDiagnostics& diag = result.diagnostics;
+        sdf::PsdfWriteOptions wo;
+        wo.encoding = sdf::PsdfEncoding::F32;
+        wo.sign = psdfSignOf(result.signUsed);
+        wo.closedManifold = diag.closedManifold;
+        wo.boundaryEdges = diag.boundaryEdges > 0;
+        wo.nonManifold = diag.nonManifoldEdges > 0;
+        wo.boundsMin = diag.boundsMin;
+        wo.boundsMax = diag.boundsMax;
+        std::vector<uint8_t> image;
+        std::string why;
+        if (!sdf::encodePsdf(result.grid, wo, image, why) ||
+            !sdf::decodePsdf(image.data(), image.size(), what, *field, why)) {
+            error =
+                fmt::format("cannot bake the SDF of {}: the baked grid is not a valid .psdf: {}", what, why);
+            return 0;
+        }
+        result.grid = sdf::SdfGrid{};  // free the baker's copy before the cache write
+        if (!cacheFile.empty()) {
+            std::error_code ec;
+            fs::create_directories(fs::path(cacheFile).parent_path(), ec);
+            if (ec) {
+                log::warn("cannot create the sdf bake cache directory for {}: {}", cacheFile, ec.message());
+            } else if (!writeAtomically(cacheFile, image, why)) {
+                log::warn("cannot write the sdf bake cache file: {}", why);
+            } else {
+                ++m_cacheStats.sdfWrites;
+            }
+        }
+    }
+    const uint64_t size = field->grid.distances.size() * sizeof(float);
+    const AssetId result = insert(AssetKind::SdfField, key, sourcePath, std::move(field), size);
+    if (result == 0) error = fmt::format("{}: asset id collision for key '{}'", what, key);
     return result;
 }
 

@@ -16,6 +16,14 @@
 // generated when the file has none) as <cacheDir>/meshes/<content hash>.pmesh and later loads of
 // the same bytes read that file instead of parsing. A cache file is never trusted: its header,
 // sizes and checksum are verified and anything wrong is reported (warning), deleted and rebuilt.
+//
+// Baked fields: bakeSdf() turns a mesh asset into an SdfField asset keyed by
+// "bake:<mesh key>:<bakeSettingsKey()>", so one mesh baked with the same settings is one asset per
+// process. With a cache directory the field is also stored as <cacheDir>/sdf/<hash>.psdf (F32) and
+// read back in later processes instead of baking; <hash> is contentHash() of the key and of the
+// mesh's positions and indices (an in-memory mesh key reused for other geometry never reads a
+// stale field). Cached .psdf files are verified like loadPsdf() (header, sizes, CRCs); a bad one
+// is reported (warning), deleted and baked again.
 // Not thread-safe.
 #pragma once
 
@@ -30,6 +38,7 @@
 #include "engine/assets/mesh.h"
 #include "engine/assets/texture.h"
 #include "engine/ecs/components.h"
+#include "engine/sdf/bake.h"
 #include "engine/sdf/psdf.h"
 #include "engine/sdf/shape_program.h"
 
@@ -61,6 +70,13 @@ struct AssetCacheStats {
     uint64_t misses = 0;    // parsed because no cache file existed
     uint64_t writes = 0;    // cache files written
     uint64_t rejected = 0;  // cache files found corrupt or stale, deleted and rebuilt
+    // bakeSdf(): baked fields (<cacheDir>/sdf/*.psdf). Hits, misses, writes and rejections count
+    // only with a cache directory; bakes counts every bake this manager ran (cache or not).
+    uint64_t sdfHits = 0;      // fields read from the cache instead of baking
+    uint64_t sdfMisses = 0;    // no cache file existed: baked
+    uint64_t sdfWrites = 0;    // cache files written
+    uint64_t sdfRejected = 0;  // cache files found corrupt or stale, deleted and baked again
+    uint64_t sdfBakes = 0;     // sdf::bake() runs (a field already in memory or cached is not baked)
 };
 
 // Importer for extra mesh file types (e.g. from a plugin): same contract as loadMesh().
@@ -81,6 +97,16 @@ public:
     AssetId loadTexture(const std::string& path, bool srgb, std::string& error);
     // A .psdf signed-distance field, fully validated (sdf::readPsdf), keyed by its content hash.
     AssetId loadPsdf(const std::string& path, std::string& error);
+    // The signed distance field of a mesh asset as an SdfField asset (sdf::bake with `settings`;
+    // the header is the one a written F32 .psdf of the bake has: dims, origin, voxel size, sign
+    // method and topology flags, mesh bounds after clean-up, min/max distance). Same mesh key and
+    // same bakeSettingsKey() -> the same asset (one more reference; no bake). With a cache
+    // directory the result is read from / written to <cacheDir>/sdf/ (see the header comment).
+    // settings.progress, when set, receives the bake's progress; otherwise a progress bar is drawn
+    // on stderr when it is a terminal and the bake takes longer than a second. Bakes of a second
+    // or more are logged (info). 0 and `error` when `mesh` is not a mesh asset or the bake fails
+    // (e.g. "mesh has no non-degenerate triangles").
+    AssetId bakeSdf(AssetId mesh, const sdf::BakeSettings& settings, std::string& error);
 
     // ---- in-memory assets ------------------------------------------------------------------
     // Meshes are validated (indices in range, multiple of 3, finite positions, attribute counts);
@@ -123,6 +149,11 @@ public:
     static AssetId stableId(AssetKind kind, std::string_view key);
     // "shapes:<content hash of the records>".
     static std::string shapeProgramKey(const sdf::ShapeProgram& program);
+    // Canonical text of everything in `settings` that changes a bake's result (resolution, voxel
+    // size, padding, sign method, quality, flipInsideOut, and the bake cache version), e.g.
+    // "v1:res=128:vs=0:pad=2:sign=auto:q=medium:flip=1". Threads and progress do not change it
+    // (the baker's grids are bitwise identical for any thread count).
+    static std::string bakeSettingsKey(const sdf::BakeSettings& settings);
 
 private:
     struct Entry;

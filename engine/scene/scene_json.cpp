@@ -895,6 +895,17 @@ bool SceneParser::parseSdf(const json& v, const std::string& ptr, ecs::SdfRender
                 return false;
             }
         }
+        // Baked now (AssetManager::bakeSdf: one asset per mesh and resolution, disk-cached); the
+        // scene holds the field, not the mesh.
+        std::string err;
+        const assets::AssetId mesh = m_assets.loadMesh(out.bakeMesh, err);
+        if (mesh == 0) return fail(p, err);
+        sdf::BakeSettings settings;
+        settings.resolution = out.bakeResolution;  // 0: automatic, medium quality
+        out.sdf = m_assets.bakeSdf(mesh, settings, err);
+        m_assets.release(mesh);
+        if (out.sdf == 0) return fail(p, err);
+        hold(out.sdf);
     }
     if (auto it = v.find("material"); it != v.end()) {
         if (!parseMaterialRef(*it, child(ptr, "material"), out.material)) return false;

@@ -136,14 +136,15 @@ TEST_F(SceneSdfTest, EveryFormParses) {
 
     const ecs::SdfRenderer& bake = sdfOf(s, "bake");
     EXPECT_EQ(bake.source, ecs::SdfSource::MeshBake);
-    EXPECT_EQ(bake.sdf, 0u);
+    ASSERT_NE(m_assets.sdfField(bake.sdf), nullptr);  // baked at load (AssetManager::bakeSdf)
+    EXPECT_EQ(m_assets.sdfField(bake.sdf)->header.dims.x, 64u);
     EXPECT_EQ(bake.bakeMesh, m_dir.file("tri.ply"));
     EXPECT_EQ(bake.bakeResolution, 64u);
     EXPECT_EQ(sdfOf(s, "bake auto").bakeResolution, 0u);
     EXPECT_EQ(s.world.get<ecs::Transform>(entityNamed(s.world, "bake"))->scale, glm::vec3(1, 2, 1));
 
     EXPECT_EQ(m_assets.count(assets::AssetKind::ShapeProgram), 5u);  // ball, carved, row, blend, every shape
-    EXPECT_EQ(m_assets.count(assets::AssetKind::SdfField), 1u);
+    EXPECT_EQ(m_assets.count(assets::AssetKind::SdfField), 3u);      // blob.psdf, tri.ply at 64 and automatic
     unloadScene(s, m_assets);
     EXPECT_EQ(m_assets.count(), 0u);
 }

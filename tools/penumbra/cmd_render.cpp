@@ -14,6 +14,7 @@
 #include "engine/ecs/components.h"
 #include "engine/engine.h"
 #include "engine/image/image.h"
+#include "engine/scene/mesh_sdf.h"
 #include "renderer/renderer.h"
 
 namespace penumbra::cli {
@@ -120,6 +121,11 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                        {"misses", assets.cacheStats().misses},
                        {"writes", assets.cacheStats().writes},
                        {"rejected", assets.cacheStats().rejected}};
+    j["sdfBakeCache"] = {{"hits", assets.cacheStats().sdfHits},
+                         {"misses", assets.cacheStats().sdfMisses},
+                         {"writes", assets.cacheStats().sdfWrites},
+                         {"rejected", assets.cacheStats().sdfRejected},
+                         {"bakes", assets.cacheStats().sdfBakes}};
     return j;
 }
 
@@ -160,6 +166,12 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "Processed-asset cache folder (default: $PENUMBRA_CACHE_DIR, $XDG_CACHE_HOME/penumbra or "
                     "~/.cache/penumbra)");
     cmd->add_flag("--no-cache", opt.noCache, "Do not read or write the processed-asset cache");
+    cmd->add_option("--mesh-sdf", opt.meshSdf,
+                    "off: meshes are rasterized; trace: every visible mesh is baked to a signed distance "
+                    "field (automatic medium resolution, cached in <cache-dir>/sdf) and sphere-traced "
+                    "instead, for comparisons")
+        ->check(CLI::IsMember({"off", "trace"}))
+        ->capture_default_str();
     cmd->add_option("--plugin-dir", opt.pluginDir, "Load shared-library plugins (*.so) from this folder");
     cmd->add_option("--shading", opt.shading, "Override the scene's shading model")
         ->check(CLI::IsMember({"cook-torrance", "blinn-phong"}));
@@ -205,6 +217,12 @@ int runRender(const RenderOptions& opt) {
     }
     if (!engine->loadScene(opt.scene, error)) {
         log::error("{}", error);
+        return 1;
+    }
+    scene::MeshSdfMode meshSdf = scene::MeshSdfMode::Off;
+    scene::parseMeshSdfMode(opt.meshSdf, meshSdf);
+    if (!scene::applyMeshSdf(engine->scene(), engine->assets(), meshSdf, error)) {
+        log::error("{}: {}", opt.scene, error);
         return 1;
     }
     scene::RenderSettings& settings = engine->settings();
