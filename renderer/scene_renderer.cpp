@@ -41,6 +41,7 @@
 #include "renderer/features/lighting_reference.h"
 #include "renderer/features/mesh_gbuffer.h"
 #include "renderer/features/scene_upload.h"
+#include "renderer/features/sdf_atlas.h"
 #include "renderer/features/sdf_scene.h"
 #include "renderer/features/sdf_trace.h"
 
@@ -142,6 +143,7 @@ struct SceneRenderer::Impl {
     std::unordered_map<ecs::Entity, glm::mat4> prevModels;
     std::unordered_set<uint64_t> warnedSdfs;  // SDF entities already warned about (once each)
     SdfSceneData sdfData;                     // read by sdf_upload's execute
+    SdfAtlas atlas;                           // the fields of the frame's SdfRenderers
     uint32_t frameIndex = 0;
 
     // the last frame
@@ -165,7 +167,8 @@ struct SceneRenderer::Impl {
                     if (s == rhi::LogSeverity::Error) graphErrors.append(msg).append("\n");
                 }),
           gpuCache(d),
-          cache(d) {}
+          cache(d),
+          atlas(d) {}
 
     ~Impl() {
         for (Target& t : targets) release(t);
@@ -211,6 +214,7 @@ struct SceneRenderer::Impl {
                     std::string& error);
     bool uploadAssets(const assets::AssetManager& assets, FrameGather& g, std::string& error);
     bool prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error);
+    bool uploadFields(FrameGather& g, std::string& error);
     void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
     void fillSdfData(const FrameGather& g);
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
@@ -462,6 +466,21 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
     return true;
 }
 
+// The field atlas holds exactly the fields this frame draws (one slot per asset).
+bool SceneRenderer::Impl::uploadFields(FrameGather& g, std::string& error) {
+    std::vector<std::pair<assets::AssetId, const sdf::PsdfAsset*>> fields;
+    std::unordered_set<assets::AssetId> listed;
+    for (const SdfSource& s : g.sdfs)
+        if (s.field && listed.insert(s.renderer->sdf).second) fields.emplace_back(s.renderer->sdf, s.field);
+    if (fields.empty() && !atlas.texture()) return true;
+    std::string why;
+    if (!atlas.update(fields, why)) {
+        error = "SDF field atlas: " + why;
+        return false;
+    }
+    return true;
+}
+
 // GPU copies of the meshes and (albedo frames) textures this frame needs.
 bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, FrameGather& g,
                                        std::string& error) {
@@ -474,6 +493,7 @@ bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, Frame
             return false;
         }
     }
+    if (!uploadFields(g, error)) return false;
     if (!g.albedo) return true;
     g.materialTexture.resize(g.materials.size());
     for (size_t m = 0; m < g.materials.size(); ++m) {
@@ -566,6 +586,7 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
     SdfSceneData& sd = sdfData;
     sd = {};
     std::unordered_map<const sdf::ShapeProgram*, uint32_t> firstRecord;
+    bool hasField = false;
     auto bound = [](double v) { return float(std::clamp(v, -double(kSdfUnbounded), double(kSdfUnbounded))); };
     for (const SdfSource& s : g.sdfs) {
         GpuSdfObject o{};
@@ -585,7 +606,7 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
             // The solid lies within the source mesh bounds; one voxel more covers hits found
             // within the hit epsilon just outside the surface.
             const sdf::PsdfHeader& h = s.field->header;
-            o.info = {uint32_t(SdfKind::Field), 0u, s.material, s.entity.index};
+            o.info = {uint32_t(SdfKind::Field), atlas.slotOf(s.renderer->sdf), s.material, s.entity.index};
             lo = h.boundsMin - h.voxelSize;
             hi = h.boundsMax + h.voxelSize;
         }
@@ -598,6 +619,12 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
         o.boundsMin.w = s.sigma;
         o.params = {s.renderer->maxSteps, 0u, 0u, 0u};
         sd.objects.push_back(o);
+        hasField = hasField || s.field;
+    }
+    if (hasField) {
+        sd.fields = atlas.fields().data();
+        sd.fieldBytes = atlas.fields().size() * sizeof(GpuSdfField);
+        sd.atlas = atlas.texture();
     }
 }
 
@@ -752,6 +779,9 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
+    st.memory.sdfAtlas = atlas.bytes();
+    st.atlas = {atlas.bytes(), atlas.fill(), atlas.residentCount(), atlas.size().x, atlas.size().y,
+                atlas.size().z, atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
 }
 
 std::vector<fg::FrameTimings> SceneRenderer::takeTimings(bool wait) {

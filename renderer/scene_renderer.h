@@ -54,7 +54,17 @@ struct MemoryReport {
     uint64_t sceneBuffers = 0;   // camera / light / material / per-object buffers
     uint64_t textures = 0;       // material textures
     uint64_t renderTargets = 0;  // G-buffer, depth, output (frame graph transients included)
-    uint64_t total() const { return meshBuffers + sceneBuffers + textures + renderTargets; }
+    uint64_t sdfAtlas = 0;       // the 3D field atlas (renderer/features/sdf_atlas.h)
+    uint64_t total() const { return meshBuffers + sceneBuffers + textures + renderTargets + sdfAtlas; }
+};
+
+// The field atlas after the frame (zeros when no field was ever drawn).
+struct AtlasReport {
+    uint64_t bytes = 0;
+    double fill = 0.0;   // voxels of resident fields / texels of the atlas
+    uint32_t slots = 0;  // resident fields (one per asset, however many instances)
+    uint32_t width = 0, height = 0, depth = 0;
+    const char* format = "none";
 };
 
 struct FrameStats {
@@ -64,6 +74,7 @@ struct FrameStats {
     uint32_t sdfObjects = 0;  // SdfRenderer entities traced
     uint64_t triangles = 0;
     uint32_t lights = 0;
+    AtlasReport atlas;
     uint32_t materials = 0;
 };
 

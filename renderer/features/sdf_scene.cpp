@@ -9,6 +9,7 @@
 #include <shaders/sdf_trace.h>
 
 #include "renderer/features/scene_upload.h"
+#include "renderer/features/sdf_atlas.h"
 
 namespace penumbra::render {
 namespace {
@@ -19,6 +20,8 @@ static_assert(offsetof(GpuSdfObject, boundsMin) == offsetof(program::SdfObject, 
 static_assert(offsetof(GpuSdfObject, info) == offsetof(program::SdfObject, info));
 static_assert(offsetof(GpuSdfObject, params) == offsetof(program::SdfObject, params));
 static_assert(sizeof(sdf::ShapeInstruction) == sizeof(program::ShapeInstruction));
+static_assert(sizeof(GpuSdfField) == sizeof(program::SdfField));
+static_assert(offsetof(GpuSdfField, boundsMin) == offsetof(program::SdfField, boundsMin));
 
 }  // namespace
 

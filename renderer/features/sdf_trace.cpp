@@ -19,8 +19,10 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
     const bool fields = sdfScene.atlas.isValid();
     using V = program::Variant;
-    static constexpr V kVariants[4] = {V::Default, V::Albedo, V::Aux, V::AlbedoAux};
-    const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0)];
+    static constexpr V kVariants[8] = {
+        V::Default,   V::Albedo,          V::Aux,          V::AlbedoAux,
+        V::SdfFields, V::AlbedoSdfFields, V::AuxSdfFields, V::AlbedoAuxSdfFields};
+    const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (fields ? 4 : 0)];
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     rhi::SamplerDesc linear;  // trilinear field sampling, clamped (slots are sampled inside)

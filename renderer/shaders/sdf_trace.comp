@@ -5,7 +5,7 @@
 //     pass ran (RASTER flag: the trace is bounded by the raster depth, so meshes and SDFs occlude
 //     each other correctly), else at the far plane;
 //  2. culling: every object's local bounds box is intersected with the ray; objects it misses are
-//     never evaluated, and an object is dropped once the ray has left its box. Up to
+//     never evaluated, and an object is dropped once a step starts past its box. Up to
 //     kListSize objects are kept in a per-pixel list; a ray crossing more boxes traces the rest
 //     from the full object array (correct, slower);
 //  3. sphere tracing with over-relaxation (Keinert et al. 2014): steps of omega * d while the
@@ -20,7 +20,7 @@
 //     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
 //     distance from the origin, for float precision); velocity from the object's previous model.
 #version 450
-#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX
+#pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"
@@ -60,16 +60,18 @@ vec2 g_interval[kListSize];
 int g_count;
 bool g_overflow;
 
-// Distance to the nearest object at ray parameter t (world point p); `nearest` is its object.
-// Objects whose box the ray has left are skipped, and an object whose box is farther than the
-// best distance so far is not evaluated. (Each call site of the distance code is inlined by the
+// Distance to the nearest object at world point p; `nearest` is its object. Objects whose box the
+// ray had left before `tFrom` (the point the last step started from) are skipped: the step from
+// tFrom to here may have crossed a box the current point is already past, and the over-relaxation
+// check needs every surface near that segment. An object whose box is farther than the best
+// distance so far is not evaluated. (Each call site of the distance code is inlined by the
 // compiler, so the shader keeps few of them: this loop, the normal's and the refinement's.)
-float sceneDistance(vec3 p, float t, float safety, out uint nearest) {
+float sceneDistance(vec3 p, float tFrom, float safety, out uint nearest) {
     float d = 3.0e38;
     nearest = 0xffffffffu;
     int count = g_overflow ? int(trace.counts.x) : g_count;
     for (int i = 0; i < count; ++i) {
-        if (!g_overflow && t > g_interval[i].y) continue;  // the ray has left this box for good
+        if (!g_overflow && tFrom > g_interval[i].y) continue;  // the ray had left this box for good
         uint obj = g_overflow ? uint(i) : g_list[i];
         vec3 pl = sdfToLocal(obj, p);
         if (sdfBoxDistance(obj, pl) >= d) continue;  // cannot be nearer than the best so far
@@ -144,7 +146,7 @@ void main() {
         uint bestObject = 0xffffffffu;
         for (; steps < stepLimit && t <= tMax; ++steps) {
             uint nearest;
-            float d = sceneDistance(ro + rd * t, t, safety, nearest);
+            float d = sceneDistance(ro + rd * t, min(prevT, t), safety, nearest);
             float radius = abs(d);
             bool sorFail = omega > 1.0 && radius + prevRadius < stepLength;
             if (sorFail) {
