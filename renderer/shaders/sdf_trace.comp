@@ -18,7 +18,8 @@
 //     each at most one voxel, land the hit on the interpolated surface instead of in front of it;
 //  6. the normal is the gradient of the hit object's world distance by central differences over
 //     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
-//     distance from the origin, for float precision); velocity from the object's previous model.
+//     distance from the origin, for float precision, and for fields at least half a voxel);
+//     velocity from the object's previous model.
 #version 450
 #pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -198,7 +199,9 @@ void main() {
 
     vec3 p = ro + rd * t;
     if (hit) {
-        float h = max(trace.epsilons.y * footprint * t, 1e-5 * max(length(p), 1.0));
+        // Fields: at least half a voxel, so the gradient spans the trilinear cells around the
+        // point instead of one cell's piecewise-linear facet.
+        float h = max(max(trace.epsilons.y * footprint * t, 1e-5 * max(length(p), 1.0)), 0.5 * sdfObjectVoxel(hitObject));
         vec3 n = objectNormal(hitObject, p, h);
         if (any(isnan(n))) n = -rd;
         uvec4 info = sdfObjects[hitObject].info;
