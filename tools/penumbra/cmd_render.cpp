@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
+#include "aov_output.h"
 #include "cli_common.h"
 #include "engine/core/log.h"
 #include "engine/core/output_file.h"
@@ -180,6 +181,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
     cmd->add_option("--debug-view", opt.debugView,
                     "Show a G-buffer channel instead of the lit image: normals | depth | albedo (none: lit)")
         ->check(CLI::IsMember({"none", "normals", "depth", "albedo"}));
+    addAovOption(cmd, opt.aov);
     return cmd;
 }
 
@@ -199,12 +201,19 @@ int runRender(const RenderOptions& opt) {
         log::error("render: {}", error);
         return 2;
     }
+    std::vector<AovOutput> aovs;
+    if (!parseAovOutputs(opt.aov, aovs, error) || !requestAuxTarget(rendererDesc, aovs, error)) {
+        log::error("render: {}", error);
+        return 2;
+    }
     if (!checkInputFile(opt.scene, "scene file (.json, .gltf or .glb)", error)) {
         log::error("render: {}", error);
         return 1;
     }
     OutputFiles outputs;
-    if (!prepareOutputs(outputs, {opt.output, opt.stats, opt.graphviz}, "render")) return 1;
+    std::vector<std::string> outputPaths = aovPaths(aovs);
+    outputPaths.insert(outputPaths.begin(), {opt.output, opt.stats, opt.graphviz});
+    if (!prepareOutputs(outputs, outputPaths, "render")) return 1;
 
     EngineDesc engineDesc;
     engineDesc.cacheDir =
@@ -281,7 +290,8 @@ int runRender(const RenderOptions& opt) {
         log::error("reading back the frame failed: {}", error);
         return 1;
     }
-    if (!writePngOutput(outputs, opt.output, image, error)) {
+    if (!writePngOutput(outputs, opt.output, image, error) ||
+        !writeAovOutputs(outputs, renderer->sceneRenderer(), width, height, aovs, error)) {
         log::error("render: {}", error);
         return 1;
     }

@@ -31,6 +31,7 @@ struct RenderOptions {
     std::string shading;             // override: cook-torrance | blinn-phong
     std::string toneMapper;          // override: clamp | reinhard | aces
     std::string debugView = "none";  // none | normals | depth | albedo
+    std::string aov;                 // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt);
