@@ -520,10 +520,11 @@ bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGathe
     }
     const bool drawing = !g.sources.empty() || !g.sdfs.empty();
     for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kAux, kOutput}) {
-        const bool needed = id == kOutput   ? !g.external
-                            : id == kAlbedo ? drawing && g.albedo
-                            : id == kAux    ? drawing && desc.aux
-                                            : drawing;
+        const bool needed =
+            id == kOutput   ? !g.external
+            : id == kAlbedo ? drawing && g.albedo
+            : id == kAux ? drawing && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings))
+                         : drawing;
         if (!needed)
             release(targets[id]);
         else if (!ensureTarget(id, error))
@@ -697,13 +698,14 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     auto importTarget = [&](TargetId id) {
         return graph.importPersistent(kTargets[id].name, targets[id].handle, rhi::Access::ShaderSampled);
     };
+    const DebugView view = frameDebugView(desc.debugView, desc.settings);  // none: lit
     GBuffer& gb = board.add<GBuffer>();
     gb = {importTarget(kDepth),
           importTarget(kNormal),
           importTarget(kMaterial),
           importTarget(kVelocity),
           g.albedo ? importTarget(kAlbedo) : fg::TextureRef{},
-          desc.aux ? importTarget(kAux) : fg::TextureRef{}};
+          frameNeedsAux(desc.aux, view) ? importTarget(kAux) : fg::TextureRef{}};
     uint64_t transientBytes = 0;
     if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g));
     if (!g.sdfs.empty()) {
@@ -716,10 +718,13 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
         addSdfTrace(fc, trace);
     }
-    if (desc.debugView != DebugView::None)
-        addDebugView(fc, desc.debugView, debugDepthRange(cam, g));
-    else
+    if (view != DebugView::None) {
+        const scene::TraceSettings trace = desc.settings.resolvedTrace();
+        addDebugView(fc, {view, debugDepthRange(cam, g), trace.maxSteps, desc.settings.slice,
+                          trace.fieldSafety, cam.nearPlane, cam.farPlane});
+    } else {
         addLighting(fc);
+    }
     return transientBytes;
 }
 
@@ -753,7 +758,7 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     lastOwnOutput = !g.external;
     lastGbuffer = !g.sources.empty() || !g.sdfs.empty();
     lastAlbedo = lastGbuffer && g.albedo;
-    lastAux = lastGbuffer && desc.aux;
+    lastAux = lastGbuffer && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings));
     haveHistory = true;
     historyCamera = desc.camera;
     prevViewProj = cam.viewProj;

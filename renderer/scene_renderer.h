@@ -9,8 +9,10 @@
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
 //                              directional + point lights, ambient) + exposure + tone mapping,
 //                              written sRGB-encoded into the RGBA8 output
-//   debug_view     (raster)    instead of lighting when FrameDesc::debugView is set: one G-buffer
-//                              channel (normals, depth, albedo) in the output
+//   debug_view     (raster)    instead of lighting when a debug view is set (FrameDesc::debugView,
+//                              else the scene's render.debugView): one G-buffer channel (normals,
+//                              depth, albedo, steps, ids) in the output, or debug_field_slice (the
+//                              SDF scene's distance on a plane; renderer/features/debug_view.h)
 // A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass; no
 // SdfRenderer: no sdf_upload or sdf_trace pass).
 //
@@ -90,7 +92,9 @@ struct FrameDesc {
     rhi::TextureHandle target;
     rhi::Access targetAccess = rhi::Access::None;
     rhi::Access targetFinalAccess = rhi::Access::ShaderSampled;
-    DebugView debugView = DebugView::None;  // show a G-buffer channel instead of the lit image
+    // Show a G-buffer channel instead of the lit image; None: settings.debugView (the scene's).
+    // Ids and steps make the frame write gbuffer.aux whatever `aux` says.
+    DebugView debugView = DebugView::None;
     bool aux = false;  // also write gbuffer.aux (entity index, trace steps) for AOVs and debug views
 };
 

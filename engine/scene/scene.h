@@ -14,12 +14,14 @@
 #pragma once
 
 #include <cstdint>
+#include <iterator>
 #include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include <glm/vec3.hpp>
+#include <glm/vec4.hpp>
 
 #include "engine/assets/asset_manager.h"
 #include "engine/assets/gltf_scene.h"
@@ -34,6 +36,23 @@ const char* shadingModelName(ShadingModel m);  // "cook-torrance", "blinn-phong"
 const char* toneMapperName(ToneMapper t);      // "clamp", "reinhard", "aces"
 bool parseShadingModel(std::string_view s, ShadingModel& out);
 bool parseToneMapper(std::string_view s, ToneMapper& out);
+
+// What a frame shows instead of the lit image (`penumbra render --debug-view`, the render block's
+// "debugView"; renderer/features/debug_view.h describes each view).
+enum class DebugView : uint32_t { None, Normals, Depth, Albedo, Steps, Ids, FieldSlice };
+inline constexpr const char* kDebugViewNames[] = {"none",  "normals", "depth",      "albedo",
+                                                  "steps", "ids",     "field-slice"};
+inline const char* toString(DebugView view) {
+    return kDebugViewNames[uint32_t(view) < std::size(kDebugViewNames) ? uint32_t(view) : 0];
+}
+inline bool parseDebugView(std::string_view text, DebugView& out) {
+    for (uint32_t i = 0; i < std::size(kDebugViewNames); ++i)
+        if (text == kDebugViewNames[i]) {
+            out = DebugView(i);
+            return true;
+        }
+    return false;
+}
 
 // The "render" object of a scene file.
 // Sphere-tracing settings of the SDF trace (renderer/features/sdf_trace.h explains each one).
@@ -71,6 +90,8 @@ struct RenderSettings {
     double fixedDt = 1.0 / 60.0;                  // update step of the app loop (seconds)
     TraceQuality quality = TraceQuality::Medium;  // the trace preset (--quality replaces it)
     TraceOverrides trace;                         // the scene's per-setting overrides
+    DebugView debugView = DebugView::None;        // --debug-view replaces it
+    glm::vec4 slice{0.0f, 1.0f, 0.0f, 0.0f};      // field-slice plane dot(xyz, p) = w, xyz unit
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };

@@ -532,7 +532,7 @@ bool SceneParser::parseVersion(const json& root) {
 bool SceneParser::parseRender(const json& v, const std::string& ptr) {
     if (!object(v, ptr) || !checkKeys(v, ptr,
                                       {"width", "height", "shading", "toneMapper", "exposure", "ambient",
-                                       "background", "camera", "fixedDt"},
+                                       "background", "camera", "fixedDt", "debugView", "slice"},
                                       "render settings")) {
         return false;
     }
@@ -573,6 +573,26 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             float dt = 0.0f;
             if (!number(value, p, dt) || !inRange(p, dt, 0.0f, 1.0f, true, false)) return false;
             s.fixedDt = value.get<double>();
+        } else if (key == "debugView") {
+            std::string name;
+            if (!string(value, p, name)) return false;
+            if (!parseDebugView(name, s.debugView)) {
+                return fail(p, fmt::format("unknown debug view '{}' (expected none, normals, depth, albedo, "
+                                           "steps, ids or field-slice)",
+                                           name));
+            }
+        } else if (key == "slice") {
+            // The field-slice plane: {"normal": [x, y, z], "offset": d} is dot(normal / |normal|, p) = d.
+            glm::vec3 n(0.0f);
+            float offset = 0.0f;
+            if (!object(value, p) || !checkKeys(value, p, {"normal", "offset"}, "slice plane")) return false;
+            auto it = value.find("normal");
+            if (it == value.end()) return fail(p, "missing \"normal\"");
+            if (!vec3(*it, child(p, "normal"), n)) return false;
+            if (!(glm::length(n) > 1e-20f)) return fail(child(p, "normal"), "the normal is zero");
+            if (auto o = value.find("offset"); o != value.end() && !number(*o, child(p, "offset"), offset))
+                return false;
+            s.slice = glm::vec4(glm::normalize(n), offset);
         }
     }
     return true;

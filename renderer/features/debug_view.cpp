@@ -1,27 +1,73 @@
 #include "renderer/features/debug_view.h"
 
-#include <shaders/debug_view.h>
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <string>
 
+#include <shaders/debug_view.h>
+#include <glm/geometric.hpp>
+
+#include "renderer/features/debug_field_slice.h"
 #include "renderer/features/fullscreen.h"
 
 namespace penumbra::render {
 
-namespace {
-constexpr const char* kNames[] = {"none", "normals", "depth", "albedo"};
+DebugView frameDebugView(DebugView requested, const scene::RenderSettings& settings) {
+    return requested != DebugView::None ? requested : settings.debugView;
 }
 
-const char* toString(DebugView view) { return kNames[uint32_t(view) < 4 ? uint32_t(view) : 0]; }
+bool frameNeedsAux(bool requested, DebugView view) {
+    return requested || view == DebugView::Ids || view == DebugView::Steps;
+}
 
-bool parseDebugView(std::string_view text, DebugView& out) {
-    for (uint32_t i = 0; i < 4; ++i)
-        if (text == kNames[i]) {
-            out = DebugView(i);
-            return true;
+bool parseSlicePlane(std::string_view text, glm::vec4& out, std::string& error) {
+    auto number = [](std::string_view s, float& v) {
+        while (!s.empty() && s.front() == ' ') s.remove_prefix(1);
+        while (!s.empty() && s.back() == ' ') s.remove_suffix(1);
+        if (!s.empty() && s.front() == '+') s.remove_prefix(1);
+        const auto [end, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+        return !s.empty() && ec == std::errc() && end == s.data() + s.size() && std::isfinite(v);
+    };
+    const std::string usage =
+        "expected AXIS=OFFSET (x, y or z, e.g. y=0.5) or NX,NY,NZ,OFFSET (e.g. 0,1,0,0.5)";
+    glm::vec3 n(0.0f);
+    float offset = 0.0f;
+    if (text.size() >= 2 && text[1] == '=' && (text[0] == 'x' || text[0] == 'y' || text[0] == 'z')) {
+        if (!number(text.substr(2), offset)) {
+            error = "--slice '" + std::string(text) + "': " + usage;
+            return false;
         }
-    return false;
+        n[text[0] - 'x'] = 1.0f;
+    } else {
+        float v[4];
+        size_t start = 0;
+        for (int i = 0; i < 4; ++i) {
+            const size_t comma = i < 3 ? text.find(',', start) : text.size();
+            if (comma == std::string_view::npos || !number(text.substr(start, comma - start), v[i]) ||
+                (i == 3 && text.find(',', start) != std::string_view::npos)) {
+                error = "--slice '" + std::string(text) + "': " + usage;
+                return false;
+            }
+            start = comma + 1;
+        }
+        n = glm::vec3(v[0], v[1], v[2]);
+        offset = v[3];
+        if (!(glm::length(n) > 1e-20f) || !std::isfinite(glm::length(n))) {
+            error = "--slice '" + std::string(text) + "': the normal is zero or too large";
+            return false;
+        }
+    }
+    out = glm::vec4(glm::normalize(n), offset);
+    return true;
 }
 
-void addDebugView(FrameContext& fc, DebugView view, float depthRange) {
+// Steps and ids (modes 3, 4) read gbuffer.aux: variant AUX; albedo (mode 2) the albedo target.
+void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
+    if (desc.view == DebugView::FieldSlice) {
+        addDebugFieldSlice(fc, {desc.slice, desc.fieldSafety, desc.nearPlane, desc.farPlane});
+        return;
+    }
     namespace program = shaders::debug_view;
     struct Data {
         SceneBuffers scene;
@@ -30,12 +76,15 @@ void addDebugView(FrameContext& fc, DebugView view, float depthRange) {
     };
     // 1. Choose the shader variant; the program's pipeline and sampler come from the cache.
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
-    const auto variant = gbuffer.albedo.isValid() ? program::Variant::Albedo : program::Variant::Default;
+    const bool aux = (desc.view == DebugView::Steps || desc.view == DebugView::Ids) && gbuffer.aux.isValid();
+    using V = program::Variant;
+    const V variant =
+        gbuffer.albedo.isValid() ? (aux ? V::AlbedoAux : V::Albedo) : (aux ? V::Aux : V::Default);
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     // 2. The push-constant block, through the struct shaderc generated from the shader.
-    const program::PushConstants push{glm::uvec4(uint32_t(view) - 1, 0, 0, 0),
-                                      glm::vec4(depthRange, 0, 0, 0)};
+    const program::PushConstants push{glm::uvec4(uint32_t(desc.view) - 1, 0, 0, 0),
+                                      glm::vec4(desc.depthRange, float(std::max(desc.stepLimit, 1u)), 0, 0)};
     fc.graph.addPass<Data>(
         "debug_view", fg::PassKind::Raster,
         // 3. Declare what the pass reads and writes; the graph places the barriers.
@@ -47,15 +96,17 @@ void addDebugView(FrameContext& fc, DebugView view, float depthRange) {
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.materials, rhi::Access::ShaderRead);
             readGBuffer(b, d.gb);
+            if (aux) b.read(d.gb.aux, rhi::Access::ShaderSampled);
         },
         // 4. Record: bind parameters by name, push constants, draw the full-screen triangle.
-        [&cache = fc.cache, prog, push](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, prog, push, aux](const Data& d, fg::PassContext& ctx) {
             beginFullscreen(ctx, d.output, prog.pipeline, "debug_view");
             ShaderParams params(*prog.vertex, *prog.fragment);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("Scene", ctx.buffer(d.scene.scene))
                 .set("Materials", ctx.buffer(d.scene.materials));
             setGBuffer(params, ctx, d.gb, prog.nearest);
+            if (aux) params.set("gbufferAux", ctx.texture(d.gb.aux), prog.nearest);
             ctx.cmd.pushConstants(&push, sizeof(push));
             drawFullscreen(ctx, params, cache, prog.pipeline);
         });

@@ -8,7 +8,10 @@
 //   sdf_trace       SceneBuffers, SdfSceneBuffers, (reads the mesh pass's depth, writes the GBuffer)
 //                   GBuffer
 //   lighting        SceneBuffers, GBuffer, Output  (writes Output)
-//   debug_view      SceneBuffers, GBuffer, Output  (writes Output instead of lighting)
+//   debug_view      SceneBuffers, GBuffer (aux for  (writes Output instead of lighting)
+//                   ids / steps), Output
+//   debug_field_    SceneBuffers, SdfSceneBuffers  (writes Output instead of lighting; adds an
+//     slice         (added empty if absent), Output empty sdf_upload when no SDF is drawn)
 //
 // GBuffer and Output are the renderer's persistent targets, imported into the graph by the frame
 // function and published before the modules run.

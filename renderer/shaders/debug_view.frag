@@ -1,10 +1,13 @@
 // debug_view, fragment stage: shows one G-buffer channel instead of the lit image
-// (renderer/features/debug_view.h). Background pixels (depth 0) are black.
+// (renderer/features/debug_view.h describes the views). Background pixels (depth 0) are black for
+// normals, depth and albedo; steps and ids decide by gbuffer.aux.
 //   mode 0 normals  world normal * 0.5 + 0.5
 //   mode 1 depth    linear depth / depthRange, white = near, black = far or nothing hit
 //   mode 2 albedo   base colour (variant ALBEDO: the albedo target, else the material's colour)
+//   mode 3 steps    trace steps / step limit through the heat ramp (variant AUX)
+//   mode 4 ids      hash colour of the entity index, black for -1 (variant AUX)
 #version 450
-#pragma penumbra_variants ALBEDO
+#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX
 #include "scene.glsl"
 #include "gbuffer.glsl"
 #include "brdf.glsl"
@@ -18,23 +21,55 @@ layout(set = 2, binding = 2) uniform sampler2D gbufferMaterial;
 #ifdef ALBEDO
 layout(set = 2, binding = 3) uniform sampler2D gbufferAlbedo;
 #endif
+#ifdef AUX
+layout(set = 2, binding = 4) uniform sampler2D gbufferAux;
+#endif
 
 layout(push_constant) uniform DebugView {
     uvec4 mode;        // x mode (see above)
-    vec4 depthRange;   // x linear depth shown as black
+    vec4 depthRange;   // x linear depth shown as black, y step limit (the heat map's top)
 } debugView;
 
 layout(location = 0) in vec2 vUv;
 layout(location = 0) out vec4 outColor;
 
+// The steps heat ramp: s = steps / limit through black, blue, cyan, green, yellow, red (s >= 1).
+vec3 heat(float s) {
+    const vec3 stops[6] = vec3[6](vec3(0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, 1.0, 1.0), vec3(0.0, 1.0, 0.0),
+                                  vec3(1.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0));
+    const float at[6] = float[6](0.0, 0.125, 0.25, 0.5, 0.75, 1.0);
+    s = clamp(s, 0.0, 1.0);
+    for (int i = 1; i < 6; ++i)
+        if (s <= at[i]) return mix(stops[i - 1], stops[i], (s - at[i - 1]) / (at[i] - at[i - 1]));
+    return stops[5];
+}
+
+// PCG (O'Neill) output hash of the entity index: the same colour for an index everywhere.
+vec3 idColour(uint id) {
+    uint state = id * 747796405u + 2891336453u;
+    uint word = ((state >> ((state >> 28u) + 4u)) ^ state) * 277803737u;
+    uint h = (word >> 22u) ^ word;
+    return 0.2 + 0.8 * vec3(float(h & 255u), float((h >> 8u) & 255u), float((h >> 16u) & 255u)) / 255.0;
+}
+
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gbufferDepth, pixel, 0).r;
+    uint mode = debugView.mode.x;
     vec3 value = vec3(0.0);
-    if (depth > 0.0) {
-        if (debugView.mode.x == 0u) {
+    if (mode >= 3u) {
+#ifdef AUX
+        vec2 aux = texelFetch(gbufferAux, pixel, 0).rg;
+        if (mode == 3u) {
+            value = aux.y > 0.0 ? heat(aux.y / debugView.depthRange.y) : vec3(0.0);
+        } else if (aux.x >= 0.0) {
+            value = idColour(uint(aux.x + 0.5));
+        }
+#endif
+    } else if (depth > 0.0) {
+        if (mode == 0u) {
             value = octDecode(texelFetch(gbufferNormal, pixel, 0).rg) * 0.5 + 0.5;
-        } else if (debugView.mode.x == 1u) {
+        } else if (mode == 1u) {
             value = vec3(1.0 - clamp(depth / debugView.depthRange.x, 0.0, 1.0));
         } else {
 #ifdef ALBEDO
@@ -44,7 +79,7 @@ void main() {
 #endif
         }
     }
-    // Normals and depth are display values already; albedo is linear colour.
-    vec3 encoded = debugView.mode.x == 2u ? srgbEncode(value) : value;
-    outColor = vec4(scene.params.w != 0u && debugView.mode.x == 2u ? value : encoded, 1.0);
+    // Normals, depth, steps and ids are display values already; albedo is linear colour.
+    vec3 encoded = mode == 2u ? srgbEncode(value) : value;
+    outColor = vec4(scene.params.w != 0u && mode == 2u ? value : encoded, 1.0);
 }
