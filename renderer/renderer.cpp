@@ -85,6 +85,7 @@ bool Renderer::renderFrame(Engine& engine, std::string& error, const std::string
     frame.width = m_desc.width ? m_desc.width : settings.width;
     frame.height = m_desc.height ? m_desc.height : settings.height;
     frame.debugView = m_desc.debugView;
+    frame.aux = m_desc.aux;
     if (m_desc.window) {
         rhi::TextureHandle backbuffer = m_device->acquireBackbuffer();
         const rhi::TextureDesc* bd = m_device->describe(backbuffer);

@@ -43,6 +43,7 @@ struct RendererDesc {
     uint32_t height = 0;
     // Show a G-buffer channel instead of the lit image (`penumbra render --debug-view`).
     render::DebugView debugView = render::DebugView::None;
+    bool aux = false;  // also write gbuffer.aux (entity index, trace steps): --aov ids / steps
 };
 
 class Renderer {

@@ -780,13 +780,13 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.memory.renderTargets = targetBytes() + transientBytes;
     st.drawCalls = uint32_t(g.sources.size());
     st.sdfObjects = uint32_t(g.sdfs.size());
+    st.memory.sdfAtlas = atlas.bytes();
+    st.atlas = {atlas.bytes(), atlas.fill(), atlas.residentCount(), atlas.size().x, atlas.size().y,
+                atlas.size().z, atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
     if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
-    st.memory.sdfAtlas = atlas.bytes();
-    st.atlas = {atlas.bytes(), atlas.fill(), atlas.residentCount(), atlas.size().x, atlas.size().y,
-                atlas.size().z, atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
 }
 
 std::vector<fg::FrameTimings> SceneRenderer::takeTimings(bool wait) {

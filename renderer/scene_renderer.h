@@ -74,9 +74,9 @@ struct FrameStats {
     MemoryReport memory;
     uint32_t drawCalls = 0;
     uint32_t sdfObjects = 0;  // SdfRenderer entities traced
+    AtlasReport atlas;
     uint64_t triangles = 0;
     uint32_t lights = 0;
-    AtlasReport atlas;
     uint32_t materials = 0;
 };
 

@@ -61,14 +61,14 @@ enum class SdfSource : uint8_t {
     None,      // nothing to draw
     Shapes,    // `sdf` is a shape-program asset (analytic shapes, CSG, repetition; AssetKind::ShapeProgram)
     Field,     // `sdf` is a .psdf field asset (AssetKind::SdfField)
-    MeshBake,  // `bakeMesh` is baked to a field on demand by the renderer, at `bakeResolution`
+    MeshBake,  // `bakeMesh` is baked to a field when the scene loads (AssetManager::bakeSdf, cached), at `bakeResolution`
 };
 
 // An object drawn from a signed distance field, placed by the entity's Transform (translation,
 // rotation and uniform scale keep distances exact; the renderer makes non-uniform scale
 // conservative). Many entities may share one `sdf` asset (instancing).
 struct SdfRenderer {
-    AssetId sdf = 0;  // Shapes / Field: the asset; 0 for MeshBake and None
+    AssetId sdf = 0;  // the ShapeProgram or SdfField asset (MeshBake: the baked field); 0 = nothing to draw
     AssetId material = 0;
     bool visible = true;
     bool castShadows = true;

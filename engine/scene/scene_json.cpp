@@ -421,6 +421,7 @@ private:
     // ---- sections ------------------------------------------------------------------------------
     bool parseVersion(const json& root);
     bool parseRender(const json& v, const std::string& ptr);
+    bool parseTraceOverrides(const json& v, const std::string& ptr, TraceOverrides& out);
     bool parseMaterials(const json& v, const std::string& ptr);
     bool parseMaterial(const json& v, const std::string& ptr, ecs::Material& out);
     bool loadTexture(const json& v, const std::string& ptr, bool srgb, assets::AssetId& out);
@@ -530,10 +531,11 @@ bool SceneParser::parseVersion(const json& root) {
 }
 
 bool SceneParser::parseRender(const json& v, const std::string& ptr) {
-    if (!object(v, ptr) || !checkKeys(v, ptr,
-                                      {"width", "height", "shading", "toneMapper", "exposure", "ambient",
-                                       "background", "camera", "fixedDt", "debugView", "slice"},
-                                      "render settings")) {
+    if (!object(v, ptr) ||
+        !checkKeys(v, ptr,
+                   {"width", "height", "shading", "toneMapper", "exposure", "ambient", "background", "camera",
+                    "fixedDt", "quality", "trace", "debugView", "slice"},
+                   "render settings")) {
         return false;
     }
     RenderSettings& s = m_scene.settings;
@@ -573,6 +575,15 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             float dt = 0.0f;
             if (!number(value, p, dt) || !inRange(p, dt, 0.0f, 1.0f, true, false)) return false;
             s.fixedDt = value.get<double>();
+        } else if (key == "quality") {
+            std::string name;
+            if (!string(value, p, name)) return false;
+            if (!parseTraceQuality(name, s.quality)) {
+                return fail(
+                    p, fmt::format("unknown quality '{}' (expected low, medium, high or reference)", name));
+            }
+        } else if (key == "trace") {
+            if (!parseTraceOverrides(value, p, s.trace)) return false;
         } else if (key == "debugView") {
             std::string name;
             if (!string(value, p, name)) return false;
@@ -593,6 +604,40 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (auto o = value.find("offset"); o != value.end() && !number(*o, child(p, "offset"), offset))
                 return false;
             s.slice = glm::vec4(glm::normalize(n), offset);
+        }
+    }
+    return true;
+}
+
+// The render block's "trace" object: any of the trace settings, each over the quality preset.
+bool SceneParser::parseTraceOverrides(const json& v, const std::string& ptr, TraceOverrides& out) {
+    if (!object(v, ptr) || !checkKeys(v, ptr,
+                                      {"maxSteps", "refineSteps", "hitEpsilon", "normalEpsilon",
+                                       "overRelaxation", "fieldSafety"},
+                                      "trace settings")) {
+        return false;
+    }
+    for (const auto& item : v.items()) {
+        const std::string& key = item.key();
+        const std::string p = child(ptr, key);
+        uint32_t n = 0;
+        float x = 0.0f;
+        if (key == "maxSteps") {
+            if (!count(item.value(), p, 1, kMaxSdfSteps, n)) return false;
+            out.maxSteps = n;
+        } else if (key == "refineSteps") {
+            if (!count(item.value(), p, 0, 64, n)) return false;
+            out.refineSteps = n;
+        } else if (key == "overRelaxation") {
+            // Keinert et al.: omega in [1, 2); beyond, the fallback would trigger on every step.
+            if (!number(item.value(), p, x) || !inRange(p, x, 1.0f, 2.0f, false, true)) return false;
+            out.overRelaxation = x;
+        } else if (key == "fieldSafety") {
+            if (!number(item.value(), p, x) || !inRange(p, x, 0.0f, 1.0f, false, false)) return false;
+            out.fieldSafety = x;
+        } else {
+            if (!number(item.value(), p, x) || !inRange(p, x, 0.0f, 100.0f, true, false)) return false;
+            (key == "hitEpsilon" ? out.hitEpsilon : out.normalEpsilon) = x;
         }
     }
     return true;

@@ -2,8 +2,8 @@
 //   - the --aov list (names, duplicates, .pfm) and the conversion of read-back G-buffer texels into
 //     AOV images, on the CPU (synthetic texels, gbuffer.aux included);
 //   - the CLI on both backends: depth equals `penumbra reference`'s depth, normals are unit length
-//     where something is hit and 0 elsewhere, the PFM rows run bottom to top, and ids / steps once
-//     the renderer has gbuffer.aux (skipped until then, with the reason).
+//     where something is hit and 0 elsewhere, the PFM rows run bottom to top, and ids / steps
+//     come from gbuffer.aux.
 // The error cases that must leave no file behind are CTest entries (cli.render.aov_*).
 #include <cmath>
 #include <cstdio>
@@ -303,23 +303,12 @@ TEST_P(RenderAovCli, PfmRowsRunBottomToTop) {
     EXPECT_EQ(normalBytes.size(), normalHeader.size() + size_t(kW) * kH * 3 * 4);
 }
 
-// Whether penumbra::RendererDesc can ask for gbuffer.aux (aov_output.cpp sets it when it exists).
-template <class Desc>
-constexpr bool kHasAuxSwitch = requires(Desc d) {
-    d.aux = true;
-};
-
 // ids / steps from gbuffer.aux: ids equal the reference's entity index on >= 99 % of the pixels hit in
 // both and are -1 where nothing is hit; a mesh scene is rasterized, so steps are 0 everywhere.
-// Skipped while penumbra::RendererDesc has no `aux` switch (the command then refuses before the work).
 TEST_P(RenderAovCli, IdsAndStepsOfAMeshScene) {
     constexpr uint32_t kW = 160, kH = 90;
     const std::string scene = kSourceDir + "/scenes/primitives.json";
     const CliRun r = render(scene, kW, kH, "depth=depth.pfm,ids=ids.pfm,steps=steps.pfm");
-    if constexpr (!kHasAuxSwitch<RendererDesc>) {
-        EXPECT_NE(r.output.find("has no gbuffer.aux target"), std::string::npos) << r.output;
-        GTEST_SKIP() << "penumbra::RendererDesc has no `aux` switch (gbuffer.aux) yet: " << r.output;
-    }
     ASSERT_EQ(r.status, 0) << r.output;
     const CliRun ref =
         runCli(fmt::format("reference '{}' --width {} --height {} --aov depth,ids --samples 1 -q "

@@ -1,5 +1,6 @@
 // The shipped scenes (scenes/*.json): they load, have what scenes/README.md says, and the meshes of
-// the default scene sit on the ground plane, side by side, fully in view of the "main" camera.
+// the default scene (baked SDF objects) sit on the floor, side by side, fully in view of the "main"
+// camera.
 #include <algorithm>
 
 #include <gtest/gtest.h>
@@ -28,45 +29,69 @@ TEST(SceneFiles, DefaultSceneLoads) {
     EXPECT_EQ(s.settings.height, 360u);
     EXPECT_EQ(s.settings.shading, ShadingModel::CookTorrance);
     EXPECT_EQ(s.settings.toneMapper, ToneMapper::Aces);
+    EXPECT_EQ(s.settings.quality, TraceQuality::Medium);
     EXPECT_EQ(s.settings.camera, "main");
     EXPECT_EQ(findCamera(w, ""), entityNamed(w, "main")) << "main is the first camera";
     EXPECT_FALSE(findCamera(w, "top").isNull());
     EXPECT_EQ(w.count<ecs::Camera>(), 2u);
     EXPECT_EQ(countLights(w, ecs::LightType::Directional), 1u);
     EXPECT_EQ(countLights(w, ecs::LightType::Point), 2u);
-    EXPECT_EQ(w.count<ecs::MeshRenderer>(), 4u);
+    // One rasterized mesh (hybrid), everything else traced.
+    EXPECT_EQ(w.count<ecs::MeshRenderer>(), 1u);
+    EXPECT_EQ(w.count<ecs::SdfRenderer>(), 8u);
 
-    // Only the npm meshes (by source file) plus primitives.
+    // The room: analytic shapes (floor, walls, pillars by repetition, a smooth-CSG sculpture).
+    for (const char* name : {"floor", "walls", "pillars", "sculpture"}) {
+        const ecs::SdfRenderer* sr = w.get<ecs::SdfRenderer>(entityNamed(w, name));
+        ASSERT_NE(sr, nullptr) << name;
+        EXPECT_EQ(sr->source, ecs::SdfSource::Shapes) << name;
+        ASSERT_NE(assets.shapeProgram(sr->sdf), nullptr) << name;
+    }
+    bool repeat = false, smooth = false;
+    for (const sdf::ShapeInstruction& r :
+         assets.shapeProgram(w.get<ecs::SdfRenderer>(entityNamed(w, "pillars"))->sdf)->records)
+        repeat = repeat || r.op == uint32_t(sdf::ShapeOp::PushRepeat);
+    for (const sdf::ShapeInstruction& r :
+         assets.shapeProgram(w.get<ecs::SdfRenderer>(entityNamed(w, "sculpture"))->sdf)->records)
+        smooth = smooth || r.op == uint32_t(sdf::ShapeOp::SmoothUnion) ||
+                 r.op == uint32_t(sdf::ShapeOp::SmoothSubtract);
+    EXPECT_TRUE(repeat) << "pillars by domain repetition";
+    EXPECT_TRUE(smooth) << "a smooth-CSG shape";
+
+    // The npm meshes as baked fields; the bunny twice, sharing one field asset (instancing).
     std::vector<std::string> files;
-    for (auto [e, mr] : w.view<ecs::MeshRenderer>()) {
-        const assets::AssetInfo* info = assets.info(mr.mesh);
-        ASSERT_NE(info, nullptr);
-        if (info->key.rfind("primitive:", 0) == 0) continue;
-        files.push_back(std::filesystem::path(info->sourcePath).filename().string());
+    for (auto [e, sr] : w.view<ecs::SdfRenderer>()) {
+        if (sr.source != ecs::SdfSource::MeshBake) continue;
+        ASSERT_NE(assets.sdfField(sr.sdf), nullptr);
+        files.push_back(std::filesystem::path(sr.bakeMesh).filename().string());
     }
     std::sort(files.begin(), files.end());
-    EXPECT_EQ(files, (std::vector<std::string>{"bunny.ply", "dragon_vrip_res2.ply", "teapot.ply"}));
+    EXPECT_EQ(files,
+              (std::vector<std::string>{"bunny.ply", "bunny.ply", "dragon_vrip_res2.ply", "teapot.ply"}));
+    EXPECT_EQ(w.get<ecs::SdfRenderer>(entityNamed(w, "bunny"))->sdf,
+              w.get<ecs::SdfRenderer>(entityNamed(w, "bunny copy"))->sdf);
+    EXPECT_EQ(assets.count(assets::AssetKind::SdfField), 3u);
 
     // Distinct materials on the three meshes.
     std::vector<assets::AssetId> materials;
-    for (const char* name : {"bunny", "teapot", "dragon", "ground"}) {
-        const ecs::MeshRenderer* mr = w.get<ecs::MeshRenderer>(entityNamed(w, name));
-        ASSERT_NE(mr, nullptr) << name;
-        ASSERT_NE(assets.material(mr->material), nullptr) << name;
-        materials.push_back(mr->material);
+    for (const char* name : {"bunny", "teapot", "dragon", "floor"}) {
+        const ecs::SdfRenderer* sr = w.get<ecs::SdfRenderer>(entityNamed(w, name));
+        ASSERT_NE(sr, nullptr) << name;
+        ASSERT_NE(assets.material(sr->material), nullptr) << name;
+        materials.push_back(sr->material);
     }
     std::sort(materials.begin(), materials.end());
     EXPECT_EQ(std::unique(materials.begin(), materials.end()), materials.end());
 
-    // Placement: each mesh rests on y = 0 (lowest vertex within 0.01 units), the three do not
-    // overlap along x, and every corner of its world bounding box is inside the main camera's frustum
-    // at the scene's 16:9 aspect.
+    // Placement: each mesh rests on y = 0 (lowest point of its mesh bounds within 0.01 units), the
+    // three do not overlap along x, and every corner of its world bounding box is inside the main
+    // camera's frustum at the scene's 16:9 aspect.
     const glm::mat4 viewProj =
         test::viewProjection(w, entityNamed(w, "main"), float(s.settings.width) / float(s.settings.height));
     float previousMaxX = -1e30f;
     for (const char* name : {"bunny", "teapot", "dragon"}) {
         glm::vec3 lo, hi;
-        test::worldBounds(w, assets, entityNamed(w, name), lo, hi);
+        test::sdfWorldBounds(w, assets, entityNamed(w, name), lo, hi);
         SCOPED_TRACE(name);
         EXPECT_NEAR(lo.y, 0.0f, 0.01f);
         EXPECT_GT(hi.x - lo.x, 1.5f) << "about 2 units wide";
@@ -81,13 +106,6 @@ TEST(SceneFiles, DefaultSceneLoads) {
         const glm::mat4 topViewProj = test::viewProjection(w, entityNamed(w, "top"), 16.0f / 9.0f);
         EXPECT_TRUE(test::inView(topViewProj, 0.5f * (lo + hi)));
     }
-    // The ground plane is under all of them.
-    glm::vec3 glo, ghi;
-    test::worldBounds(w, assets, entityNamed(w, "ground"), glo, ghi);
-    EXPECT_EQ(glo.y, 0.0f);
-    EXPECT_EQ(ghi.y, 0.0f);
-    EXPECT_LT(glo.x, -4.0f);
-    EXPECT_GT(ghi.x, 4.0f);
 
     unloadScene(s, assets);
     EXPECT_EQ(assets.count(), 0u);

@@ -61,4 +61,24 @@ inline void worldBounds(const ecs::World& world, const assets::AssetManager& ass
     }
 }
 
+// World bounds of an SdfRenderer's field (its source mesh bounds, the 8 corners transformed).
+inline void sdfWorldBounds(const ecs::World& world, const assets::AssetManager& assets, ecs::Entity e,
+                           glm::vec3& lo, glm::vec3& hi) {
+    lo = glm::vec3(1e30f);
+    hi = glm::vec3(-1e30f);
+    const ecs::Transform* t = world.get<ecs::Transform>(e);
+    const ecs::SdfRenderer* sr = world.get<ecs::SdfRenderer>(e);
+    if (!t || !sr) return;
+    const sdf::PsdfAsset* field = assets.sdfField(sr->sdf);
+    if (!field) return;
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec3& a = field->header.boundsMin;
+        const glm::dvec3& b = field->header.boundsMax;
+        const glm::vec3 p((c & 1) ? b.x : a.x, (c & 2) ? b.y : a.y, (c & 4) ? b.z : a.z);
+        const glm::vec3 w(t->worldMatrix * glm::vec4(p, 1.0f));
+        lo = glm::min(lo, w);
+        hi = glm::max(hi, w);
+    }
+}
+
 }  // namespace penumbra::test

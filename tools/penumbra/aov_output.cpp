@@ -61,18 +61,6 @@ float floatAt(const TargetTexels& t, size_t index) {
     return v;
 }
 
-// `desc.aux` exists once the renderer offers gbuffer.aux (render::FrameDesc::aux, passed through
-// penumbra::RendererDesc); until then a request for ids or steps is refused before the work.
-template <class Desc>
-bool setAuxSwitch(Desc& desc, bool on) {
-    if constexpr (requires { desc.aux = true; }) {
-        desc.aux = on;
-        return true;
-    } else {
-        return !on;
-    }
-}
-
 }  // namespace
 
 const char* aovName(RenderAov aov) {
@@ -147,13 +135,10 @@ bool aovsNeedAux(const std::vector<AovOutput>& aovs) {
     });
 }
 
-bool requestAuxTarget(RendererDesc& desc, const std::vector<AovOutput>& aovs, std::string& error) {
-    if (setAuxSwitch(desc, aovsNeedAux(aovs))) return true;
-    error =
-        "--aov ids / steps: this build's renderer has no gbuffer.aux target (entity ids and trace steps) "
-        "yet; "
-        "depth and normal are available";
-    return false;
+bool requestAuxTarget(RendererDesc& desc, const std::vector<AovOutput>& aovs, std::string&) {
+    // gbuffer.aux (entity ids, trace steps) only when ids or steps are asked for.
+    desc.aux = aovsNeedAux(aovs);
+    return true;
 }
 
 bool convertAov(RenderAov aov, uint32_t width, uint32_t height, const TargetTexels* depth,

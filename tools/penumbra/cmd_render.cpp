@@ -102,11 +102,14 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                           {"samples", s.gpu.size()}});
     }
     j["passes"] = passes;
-    j["memory"] = {{"meshBuffers", stats.memory.meshBuffers},
-                   {"sceneBuffers", stats.memory.sceneBuffers},
-                   {"textures", stats.memory.textures},
-                   {"renderTargets", stats.memory.renderTargets},
-                   {"total", stats.memory.total()}};
+    j["memory"] = {{"meshBuffers", stats.memory.meshBuffers}, {"sceneBuffers", stats.memory.sceneBuffers},
+                   {"textures", stats.memory.textures},       {"renderTargets", stats.memory.renderTargets},
+                   {"sdfAtlas", stats.memory.sdfAtlas},       {"total", stats.memory.total()}};
+    j["sdfAtlas"] = {{"bytes", stats.atlas.bytes},
+                     {"fill", jsonNumber(stats.atlas.fill)},
+                     {"slots", stats.atlas.slots},
+                     {"size", {stats.atlas.width, stats.atlas.height, stats.atlas.depth}},
+                     {"format", stats.atlas.format}};
     j["counts"] = {{"entities", world.aliveCount()},
                    {"meshRenderers", world.count<ecs::MeshRenderer>()},
                    {"cameras", world.count<ecs::Camera>()},
@@ -115,6 +118,8 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                    {"meshAssets", assets.count(assets::AssetKind::Mesh)},
                    {"materialAssets", assets.count(assets::AssetKind::Material)},
                    {"textureAssets", assets.count(assets::AssetKind::Texture)},
+                   {"sdfRenderers", world.count<ecs::SdfRenderer>()},
+                   {"sdfObjects", stats.sdfObjects},
                    {"drawCalls", stats.drawCalls},
                    {"triangles", stats.triangles}};
     j["assetCache"] = {{"dir", run.cacheDir},
@@ -179,9 +184,17 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
     cmd->add_option("--tone-mapper", opt.toneMapper, "Override the scene's tone mapper")
         ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
     cmd->add_option("--debug-view", opt.debugView,
-                    "Show a G-buffer channel instead of the lit image: normals | depth | albedo (none: lit)")
-        ->check(CLI::IsMember({"none", "normals", "depth", "albedo"}));
+                    "Show a debug view instead of the lit image: normals | depth | albedo | steps | ids | "
+                    "field-slice (none: lit; replaces the scene's render.debugView; docs/FORMATS.md)")
+        ->check(CLI::IsMember({"none", "normals", "depth", "albedo", "steps", "ids", "field-slice"}));
+    cmd->add_option("--slice", opt.slice,
+                    "The field-slice plane: AXIS=OFFSET (x, y or z; e.g. y=0.5) or NX,NY,NZ,OFFSET "
+                    "(dot(N / |N|, p) = OFFSET); replaces the scene's render.slice (default y=0)");
     addAovOption(cmd, opt.aov);
+    cmd->add_option("--quality", opt.quality,
+                    "SDF trace quality preset: low | medium | high | reference (replaces the scene's "
+                    "render.quality; the scene's render.trace overrides still apply; docs/FORMATS.md)")
+        ->check(CLI::IsMember({"low", "medium", "high", "reference"}));
     return cmd;
 }
 
@@ -192,12 +205,16 @@ int runRender(const RenderOptions& opt) {
     rendererDesc.validation = opt.validation;
     rendererDesc.width = opt.width;
     rendererDesc.height = opt.height;
-    render::parseDebugView(opt.debugView, rendererDesc.debugView);
     if (!chooseBackend(opt.backend, "render", rendererDesc.backend, error)) {
         log::error("{}", error);
         return 2;
     }
     if (!checkPngPath(opt.output, "-o", error)) {
+        log::error("render: {}", error);
+        return 2;
+    }
+    glm::vec4 slice(0.0f);
+    if (!opt.slice.empty() && !render::parseSlicePlane(opt.slice, slice, error)) {
         log::error("render: {}", error);
         return 2;
     }
@@ -237,6 +254,9 @@ int runRender(const RenderOptions& opt) {
     scene::RenderSettings& settings = engine->settings();
     if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
     if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
+    if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
+    if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
+    if (!opt.slice.empty()) settings.slice = slice;
     if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
         log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
         return 1;

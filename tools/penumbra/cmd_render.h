@@ -26,12 +26,15 @@ struct RenderOptions {
     std::string graphviz;
     std::string cacheDir;  // empty: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra or ~/.cache/penumbra
     bool noCache = false;
-    std::string meshSdf = "off";     // --mesh-sdf off | trace (engine/scene/mesh_sdf.h)
-    std::string pluginDir;           // empty: none
-    std::string shading;             // override: cook-torrance | blinn-phong
-    std::string toneMapper;          // override: clamp | reinhard | aces
-    std::string debugView = "none";  // none | normals | depth | albedo
-    std::string aov;                 // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
+    std::string meshSdf = "off";  // --mesh-sdf off | trace (engine/scene/mesh_sdf.h)
+    std::string pluginDir;        // empty: none
+    std::string shading;          // override: cook-torrance | blinn-phong
+    std::string toneMapper;       // override: clamp | reinhard | aces
+    std::string quality;          // override: low | medium | high | reference (SDF trace preset)
+    std::string debugView;        // empty: the scene's | none | normals | depth | albedo | steps |
+                                  // ids | field-slice
+    std::string slice;            // --slice AXIS=OFFSET | NX,NY,NZ,OFFSET; empty: the scene's
+    std::string aov;              // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt);
