@@ -5,6 +5,7 @@
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
 //   penumbra reference <scene> -o DIR --aov ...  CPU reference AOVs as PFM (cmd_reference.cpp)
+//   penumbra bench trace [scene] [...]        benchmarks for docs/BENCHMARKS.md (cmd_bench.cpp)
 // Global flags (-v, --version, --help) are accepted before or after the subcommand. Every command
 // checks its inputs, outputs, backend and image size before the work and writes its outputs all or
 // nothing (cli_common.h, engine/core/output_file.h).
@@ -18,6 +19,7 @@
 #include <CLI/CLI.hpp>
 
 #include "cli_common.h"
+#include "cmd_bench.h"
 #include "cmd_reference.h"
 #include "cmd_render.h"
 #include "cmd_sdf.h"
@@ -216,6 +218,8 @@ int main(int argc, char** argv) {
     CLI::App* sdfInfo = nullptr;
     CLI::App* sdfSample = nullptr;
     penumbra::cli::addSdfCommand(app, sdfInfoOpt, sdfSampleOpt, &sdfInfo, &sdfSample);
+    penumbra::cli::BenchTraceOptions benchTraceOpt;
+    const penumbra::cli::BenchCommands bench = penumbra::cli::addBenchCommand(app, benchTraceOpt);
 
     try {
         app.parse(argc, argv);
@@ -236,5 +240,6 @@ int main(int argc, char** argv) {
     }
     if (sdfInfo->parsed()) return penumbra::cli::runSdfInfo(sdfInfoOpt);
     if (sdfSample->parsed()) return penumbra::cli::runSdfSample(sdfSampleOpt);
+    if (bench.trace->parsed()) return penumbra::cli::runBenchTrace(benchTraceOpt);
     return 2;
 }
