@@ -20,17 +20,10 @@ namespace {
 constexpr uint32_t kMinAtlasSize = 16;              // texels per axis of the smallest atlas
 constexpr uint64_t kClearChunkBytes = 16ull << 20;  // zero-fill uploads of at most this size
 
-uint32_t floorPow2(uint32_t v) {
-    uint32_t p = 1;
-    while (p <= v / 2) p *= 2;
-    return v == 0 ? 0 : p;
-}
-
-uint32_t ceilPow2(uint32_t v) {
-    uint32_t p = 1;
-    while (p < v && p < (1u << 31)) p *= 2;
-    return p;
-}
+// Atlas sizes are multiples of kAtlasGranule texels per axis (tight for one field: a 128 x 66 x 84
+// field takes 128 x 72 x 88 texels, where powers of two would take 128 x 128 x 128).
+constexpr uint32_t kAtlasGranule = 8;
+uint32_t roundUpGranule(uint32_t v) { return (v + kAtlasGranule - 1) / kAtlasGranule * kAtlasGranule; }
 
 uint64_t volume(const glm::uvec3& s) { return uint64_t(s.x) * s.y * s.z; }
 
@@ -306,7 +299,7 @@ bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::Ps
         // Every wanted field packed again, largest first, into the current size or a larger one.
         std::vector<Pending> all = wanted;
         std::stable_sort(all.begin(), all.end(), larger);
-        const uint32_t cap = floorPow2(max3D);
+        const uint32_t cap = std::max(max3D / kAtlasGranule * kAtlasGranule, kAtlasGranule);
         uint64_t totalVoxels = 0;
         glm::uvec3 largest(0);
         for (const Pending& p : all) {
@@ -314,13 +307,13 @@ bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::Ps
             largest = glm::max(largest, p.asset->grid.dims);
         }
         if (!m_texture.isValid()) size = glm::uvec3(kMinAtlasSize);
-        for (int a = 0; a < 3; ++a) size[a] = std::max(size[a], std::min(cap, ceilPow2(largest[a])));
-        auto grow = [&] {  // doubles the smallest axis that can still grow; false when none can
+        for (int a = 0; a < 3; ++a) size[a] = std::max(size[a], std::min(cap, roundUpGranule(largest[a])));
+        auto grow = [&] {  // grows the smallest axis that can still grow by half; false when none can
             int pick = -1;
             for (int a = 2; a >= 0; --a)
                 if (size[a] < cap && (pick < 0 || size[a] < size[pick])) pick = a;
             if (pick < 0) return false;
-            size[pick] *= 2;
+            size[pick] = std::min(cap, roundUpGranule(size[pick] + size[pick] / 2));
             return true;
         };
         bool ok = true;

@@ -16,15 +16,17 @@
 //
 // Sampling. The pass that reads the atlas creates its own sampler, which must be: linear min and
 // mag filter, clamp-to-edge on u, v and w (rhi::SamplerDesc's defaults). Slots have no gap
-// between them: sdf_field.glsl clamps sample positions to the slot's box of voxel centres, and
-// the atlas's sizes are powers of two so that the clamped texel coordinates are exact in float
-// (a filter footprint never reaches a neighbouring slot with a non-zero weight). Never-written
+// between them: sdf_field.glsl clamps sample positions to the slot's box of voxel centres shrunk by
+// 1/64 texel, so the float rounding of the texel coordinate (~1e-7 of the atlas size, far below
+// 1/64) never gives a texel of a neighbouring slot a non-zero filter weight; the interpolation
+// bound includes the shrink. Never-written
 // texels are zero (the texture is cleared when created), so a zero weight never meets a NaN.
 //
 // Packing: a guillotine allocator of free boxes (best fit by volume, the rest split in three boxes,
 // freed boxes merged back with free neighbours that form a box). When a new field does not fit,
 // every resident field is packed again (largest first) into the current size, then into ever larger
-// sizes (the smallest axis doubled, up to the device's maximum 3D texture size); a new texture is
+// sizes (sizes are multiples of 8 texels: the smallest axis grown by half, up to the device's
+// maximum 3D texture size); a new texture is
 // made when the size changes and the resident fields are uploaded again (logged at info level).
 // Slot indices never change while their asset stays resident; texel positions may (fields() says
 // where each one is now).

@@ -40,6 +40,9 @@
 //     distances |c_i - p| by at most e per axis (its partial derivatives are averages of
 //     differences of a 1-Lipschitz function of the corners), so the term is
 //     3 * (2^-8 + atlasSize * 2^-22) voxels: 0.0117 voxel for atlases up to 1024 texels a side.
+//   - The sample position is moved at most SDF_FIELD_SHRINK texel per axis inside the slot's box
+//     (sdfFieldSample), which by the same argument moves the interpolant by at most
+//     3 * SDF_FIELD_SHRINK voxels (0.047), added to the term.
 //   - The filter arithmetic is assumed to be at least float precision (it is on llvmpipe/lavapipe
 //     and on the desktop GPUs we know of); its rounding (2^-24 of the corner values) is absorbed
 //     by the term above.
@@ -60,7 +63,7 @@
 // One slot: render::GpuSdfField (std430, 96 bytes).
 struct SdfField {
     vec4 origin;     // xyz: field-space position of voxel (0,0,0)'s centre; w: voxel size
-    vec4 uvwScale;   // xyz: 1 / atlas size in texels (powers of two)
+    vec4 uvwScale;   // xyz: 1 / atlas size in texels
     vec4 uvwOffset;  // xyz: the slot's first texel
     vec4 dims;       // xyz: voxels per axis
     vec4 boundsMin;  // xyz: source mesh bounds min (rounded down); w: 1 when the bounds lie in B
@@ -83,10 +86,17 @@ float sdfFieldVoxelSize(uint slot) { return sdfFields[slot].origin.w; }
 // Position of p in voxel units from voxel (0,0,0)'s centre: B is [0, dims - 1].
 vec3 sdfFieldVoxelCoord(SdfField f, vec3 p) { return (p - f.origin.xyz) / f.origin.w; }
 
-// Hardware trilinear sample at voxel coordinate x in [0, dims - 1], in field units. The atlas size
-// is a power of two, so a coordinate on B's border maps exactly onto the border texel's centre and
-// the filter never gives a texel of a neighbouring slot a non-zero weight.
+// Inward shrink of the sampled box, in texels: the texel coordinate's float rounding (~1e-7 of the
+// atlas size) stays far below it, so the filter never gives a texel of a neighbouring slot a
+// non-zero weight. The interpolation bound adds 3 * SDF_FIELD_SHRINK voxel for it.
+const float SDF_FIELD_SHRINK = 0.015625;
+
+// Hardware trilinear sample at voxel coordinate x in [0, dims - 1], in field units, taken at most
+// SDF_FIELD_SHRINK texel inside the slot's box of texel centres (at its middle on a one-voxel axis).
 float sdfFieldSample(SdfField f, vec3 x) {
+    vec3 hi = f.dims.xyz - 1.0;
+    vec3 lo = min(vec3(SDF_FIELD_SHRINK), 0.5 * hi);
+    x = clamp(x, lo, hi - lo);
     vec3 uvw = (f.uvwOffset.xyz + 0.5 + x) * f.uvwScale.xyz;
     return textureLod(sdfAtlas, uvw, 0.0).r * f.origin.w;
 }
@@ -125,6 +135,7 @@ float sdfFieldInterpolationBound(uint slot, vec3 p) {
         sum += w.x * w.y * w.z * length(c - t);
     }
     float atlasSize = 1.0 / min(min(f.uvwScale.x, f.uvwScale.y), f.uvwScale.z);
-    float hardware = 3.0 * (0.00390625 + atlasSize * 2.384185791015625e-7);  // 3 * (2^-8 + size * 2^-22)
+    // 3 * (2^-8 + size * 2^-22) for the filter's weights and coordinate rounding, plus the shrink.
+    float hardware = 3.0 * (0.00390625 + atlasSize * 2.384185791015625e-7) + 3.0 * SDF_FIELD_SHRINK;
     return (sum + hardware) * f.origin.w;
 }
