@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -137,6 +138,295 @@ bool finiteMat(const glm::dmat4& m) {
     return true;
 }
 
+double maxAbs(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
+
+// ---- SDF objects (docs/ACCURACY.md, "SDF objects") --------------------------------------------------
+
+// A shape program or a field in its own frame ("local"), placed by an affine matrix. Rays are
+// transformed into the local frame (origin by the inverse matrix, direction by its linear part),
+// which keeps the ray parameter t: hits are found there in double precision.
+struct SdfObject {
+    bool isField = false;
+    sdf::ShapeProgram program;                   // shape program
+    std::shared_ptr<const sdf::PsdfAsset> grid;  // field (a copy)
+    std::unique_ptr<sdf::SdfSampler> sampler;    // field: normals
+    glm::dmat4 toLocal{1.0};
+    glm::dmat3 normalMatrix{1.0};         // inverse transpose of the model's linear part
+    glm::dvec3 boxMin{0.0}, boxMax{0.0};  // local: padded program bounds / box of voxel centres
+    double scale = 1.0;                   // local length scale of the tolerances
+    int32_t id = -1;
+    uint32_t mask = 0;
+};
+
+struct SdfCounters {
+    std::atomic<uint64_t> rays{0}, iterations{0}, unconverged{0};
+};
+
+// Clips o + t d to the box [lo, hi] (infinite sides allowed): narrows [t0, t1]; false when empty.
+bool clipToBox(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& lo, const glm::dvec3& hi,
+               double& t0, double& t1) {
+    for (int a = 0; a < 3; ++a) {
+        if (d[a] == 0.0) {
+            if (o[a] < lo[a] || o[a] > hi[a]) return false;
+            continue;
+        }
+        double ta = (lo[a] - o[a]) / d[a], tb = (hi[a] - o[a]) / d[a];
+        if (ta > tb) std::swap(ta, tb);
+        t0 = std::max(t0, ta);
+        t1 = std::min(t1, tb);
+    }
+    return t0 <= t1;
+}
+
+// Bisects the bracket [a, b] (f(a), f(b) of opposite signs) to kSdfTolerance relative in t.
+template <class F>
+double bisect(F&& f, double a, double b, double fa) {
+    for (int i = 0; i < 256 && b - a > kSdfTolerance * std::max(std::abs(a), std::abs(b)); ++i) {
+        const double m = 0.5 * (a + b);
+        if (!(m > a && m < b)) break;
+        const double fm = f(m);
+        if (fm == 0.0) return m;
+        if ((fm > 0.0) == (fa > 0.0)) {
+            a = m;
+            fa = fm;
+        } else {
+            b = m;
+        }
+    }
+    return 0.5 * (a + b);
+}
+
+// First root of a shape program along the local ray in (tMin, tMax): sphere tracing (the program
+// never overestimates the distance, so a step of |d| / |dir| never crosses the surface) until
+// |d| < tolerance or a sign change, whose bracket is bisected.
+bool intersectProgram(const SdfObject& obj, const glm::dvec3& o, const glm::dvec3& d, double tMin,
+                      double tMax, double& tHit, SdfCounters& counters) {
+    double t0 = tMin, t1 = tMax;
+    if (!clipToBox(o, d, obj.boxMin, obj.boxMax, t0, t1)) return false;
+    const double speed = glm::length(d);
+    if (!(speed > 0.0) || !std::isfinite(t0)) return false;
+    ++counters.rays;
+    auto f = [&](double t) { return sdf::evaluateShapeProgram(obj.program, o + t * d); };
+    auto tolerance = [&](double t) { return kSdfTolerance * std::max(obj.scale, maxAbs(o + t * d)); };
+    double t = t0, ft = f(t);
+    if (std::abs(ft) < tolerance(t) && t > tMin) {
+        tHit = t;
+        return true;
+    }
+    uint32_t it = 0;
+    bool hit = false;
+    for (; it < kSdfMaxIterations; ++it) {
+        const double tn = t + std::max(std::abs(ft), tolerance(t)) / speed;
+        if (!(tn <= t1)) break;  // left the bounds (or tMax) without a root
+        const double fn = f(tn);
+        if (fn == 0.0) {
+            tHit = tn;
+            hit = true;
+            break;
+        }
+        if ((fn > 0.0) != (ft > 0.0)) {
+            tHit = bisect(f, t, tn, ft);
+            hit = true;
+            break;
+        }
+        if (std::abs(fn) < tolerance(tn)) {
+            // Within the tolerance of the surface: a crossing is just ahead unless the ray grazes it.
+            // Steps doubling from |d| / |dir| bracket it (they go at most twice as far as the root,
+            // and no further than 1e-6 * scale), and the bracket is bisected; without a crossing
+            // (a grazing ray) the hit is tn.
+            tHit = tn;
+            hit = true;
+            double a = tn, fa = fn, step = std::max(std::abs(fn), 1e-3 * tolerance(tn)) / speed;
+            const double limit = tn + 1e-6 * std::max(obj.scale, maxAbs(o + tn * d)) / speed;
+            for (int k = 0; k < 64 && a + step <= std::min(t1, limit); ++k, step *= 2.0) {
+                const double b = a + step, fb = f(b);
+                if (fb == 0.0) {
+                    tHit = b;
+                    break;
+                }
+                if ((fb > 0.0) != (fa > 0.0)) {
+                    tHit = bisect(f, a, b, fa);
+                    break;
+                }
+                a = b;
+                fa = fb;
+            }
+            break;
+        }
+        t = tn;
+        ft = fn;
+    }
+    counters.iterations += it + 1;
+    if (it == kSdfMaxIterations) ++counters.unconverged;
+    return hit;
+}
+
+// The field's interpolant in grid coordinates g (voxel centre (i, j, k) at g = (i, j, k)) inside the
+// cell with lower corner c: nested lerps as in sdf::SdfSampler::trilinear.
+struct FieldCell {
+    double v[8];  // corner values, index x + 2 y + 4 z
+    double eval(const glm::dvec3& u) const {
+        const double c00 = v[0] * (1 - u.x) + v[1] * u.x, c10 = v[2] * (1 - u.x) + v[3] * u.x;
+        const double c01 = v[4] * (1 - u.x) + v[5] * u.x, c11 = v[6] * (1 - u.x) + v[7] * u.x;
+        const double c0 = c00 * (1 - u.y) + c10 * u.y, c1 = c01 * (1 - u.y) + c11 * u.y;
+        return c0 * (1 - u.z) + c1 * u.z;
+    }
+};
+
+// First root of a field's trilinear interpolant along the local ray in (tMin, tMax): a 3D DDA over
+// the cells between voxel centres; in a cell whose corners change sign the interpolant along the
+// ray is a cubic, split at its turning points into monotone pieces whose sign changes are bisected.
+bool intersectField(const SdfObject& obj, const glm::dvec3& o, const glm::dvec3& d, double tMin, double tMax,
+                    double& tHit, SdfCounters& counters) {
+    const sdf::SdfGrid& g = obj.grid->grid;
+    const glm::dvec3 og = (o - g.origin) / g.voxelSize - 0.5, dg = d / g.voxelSize;
+    const glm::dvec3 hiG = glm::dvec3(g.dims) - 1.0;
+    double t0 = tMin, t1 = tMax;
+    if (!clipToBox(og, dg, glm::dvec3(0.0), hiG, t0, t1) || !std::isfinite(t0)) return false;
+    ++counters.rays;
+    auto value = [&](uint32_t i, uint32_t j, uint32_t k) { return double(g.distances[g.index(i, j, k)]); };
+    glm::ivec3 cell, stepDir;
+    glm::dvec3 tNext, tDelta;
+    const glm::dvec3 start = og + t0 * dg;
+    for (int a = 0; a < 3; ++a) {
+        const int last = int(g.dims[a]) - 2;
+        cell[a] = std::clamp(int(std::floor(start[a])), 0, last);
+        if (dg[a] > 0.0) {
+            stepDir[a] = 1;
+            tNext[a] = (double(cell[a] + 1) - og[a]) / dg[a];
+            tDelta[a] = 1.0 / dg[a];
+        } else if (dg[a] < 0.0) {
+            stepDir[a] = -1;
+            tNext[a] = (double(cell[a]) - og[a]) / dg[a];
+            tDelta[a] = -1.0 / dg[a];
+        } else {
+            stepDir[a] = 0;
+            tNext[a] = kInf;
+            tDelta[a] = kInf;
+        }
+    }
+    bool first = true;
+    uint64_t cells = 0;
+    double ts = t0;
+    while (ts <= t1) {
+        ++cells;
+        const double te = std::min({tNext.x, tNext.y, tNext.z, t1});
+        FieldCell c;
+        double lo = kInf, hi = -kInf;
+        for (int k = 0; k < 8; ++k) {
+            c.v[k] = value(uint32_t(cell.x + (k & 1)), uint32_t(cell.y + ((k >> 1) & 1)),
+                           uint32_t(cell.z + ((k >> 2) & 1)));
+            lo = std::min(lo, c.v[k]);
+            hi = std::max(hi, c.v[k]);
+        }
+        const glm::dvec3 base(cell);
+        auto f = [&](double t) { return c.eval(og + t * dg - base); };
+        if (first) {
+            first = false;
+            // Entering the box inside the solid: the box clips it, the hit is the entry point.
+            if (t0 > tMin && f(t0) < 0.0) {
+                tHit = t0;
+                counters.iterations += cells;
+                return true;
+            }
+        }
+        if (lo <= 0.0 && hi >= 0.0) {
+            // The cubic k0 + k1 t + k2 t^2 + k3 t^3 along the ray; its turning points split [ts, te].
+            const glm::dvec3 u0 = og - base;
+            double k[4] = {0, 0, 0, 0};
+            for (int n = 0; n < 8; ++n) {
+                double a0[3], a1[3];
+                for (int a = 0; a < 3; ++a) {
+                    const bool upper = (n >> a) & 1;
+                    a0[a] = upper ? u0[a] : 1.0 - u0[a];
+                    a1[a] = upper ? dg[a] : -dg[a];
+                }
+                k[0] += c.v[n] * a0[0] * a0[1] * a0[2];
+                k[1] += c.v[n] * (a1[0] * a0[1] * a0[2] + a0[0] * a1[1] * a0[2] + a0[0] * a0[1] * a1[2]);
+                k[2] += c.v[n] * (a1[0] * a1[1] * a0[2] + a1[0] * a0[1] * a1[2] + a0[0] * a1[1] * a1[2]);
+                k[3] += c.v[n] * a1[0] * a1[1] * a1[2];
+            }
+            double cuts[4] = {ts, te, te, te};
+            int nCuts = 1;
+            // 3 k3 t^2 + 2 k2 t + k1 = 0 (stable quadratic; linear when k3 = 0)
+            const double qa = 3.0 * k[3], qb = 2.0 * k[2], qc = k[1];
+            double r[2];
+            int nr = 0;
+            if (qa != 0.0) {
+                const double disc = qb * qb - 4.0 * qa * qc;
+                if (disc >= 0.0) {
+                    const double q = -0.5 * (qb + std::copysign(std::sqrt(disc), qb));
+                    if (q != 0.0) {
+                        r[nr++] = q / qa;
+                        r[nr++] = qc / q;
+                    } else {
+                        r[nr++] = 0.0;
+                    }
+                }
+            } else if (qb != 0.0) {
+                r[nr++] = -qc / qb;
+            }
+            if (nr == 2 && r[0] > r[1]) std::swap(r[0], r[1]);
+            for (int i = 0; i < nr; ++i)
+                if (r[i] > ts && r[i] < te) cuts[nCuts++] = r[i];
+            cuts[nCuts++] = te;
+            double a = cuts[0], fa = f(a);
+            for (int i = 1; i < nCuts; ++i) {
+                const double b = cuts[i], fb = f(b);
+                if (fa == 0.0 && a > tMin) {
+                    tHit = a;
+                    counters.iterations += cells;
+                    return true;
+                }
+                if ((fa > 0.0) != (fb > 0.0) && fa != 0.0) {
+                    tHit = fb == 0.0 ? b : bisect(f, a, b, fa);
+                    counters.iterations += cells;
+                    return true;
+                }
+                a = b;
+                fa = fb;
+            }
+        }
+        // Next cell.
+        if (te >= t1) break;
+        int axis = 0;
+        if (tNext.y < tNext[axis]) axis = 1;
+        if (tNext.z < tNext[axis]) axis = 2;
+        cell[axis] += stepDir[axis];
+        if (cell[axis] < 0 || cell[axis] > int(g.dims[axis]) - 2) break;
+        tNext[axis] += tDelta[axis];
+        ts = te;
+    }
+    counters.iterations += cells;
+    return false;
+}
+
+bool intersectSdf(const SdfObject& obj, const glm::dvec3& origin, const glm::dvec3& dir, double tMin,
+                  double tMax, double& t, SdfCounters& counters) {
+    const glm::dvec3 o = glm::dvec3(obj.toLocal * glm::dvec4(origin, 1.0));
+    const glm::dvec3 d = glm::dmat3(obj.toLocal) * dir;
+    return obj.isField ? intersectField(obj, o, d, tMin, tMax, t, counters)
+                       : intersectProgram(obj, o, d, tMin, tMax, t, counters);
+}
+
+// World-space unit normal at local point p: the central-difference gradient of the program or of
+// the field's interpolant, by the inverse transpose.
+glm::dvec3 sdfNormal(const SdfObject& obj, const glm::dvec3& p) {
+    const double h = obj.isField ? 1e-6 * obj.grid->grid.voxelSize : 1e-7 * std::max(obj.scale, maxAbs(p));
+    auto f = [&](const glm::dvec3& q) {
+        return obj.isField ? obj.sampler->trilinear(q) : sdf::evaluateShapeProgram(obj.program, q);
+    };
+    glm::dvec3 grad;
+    for (int a = 0; a < 3; ++a) {
+        glm::dvec3 e(0.0);
+        e[a] = h;
+        grad[a] = (f(p + e) - f(p - e)) / (2.0 * h);
+    }
+    const glm::dvec3 n = obj.normalMatrix * grad;
+    const double len = glm::length(n);
+    return len > 0.0 && std::isfinite(len) ? n / len : glm::dvec3(0.0, 1.0, 0.0);
+}
+
 }  // namespace
 
 // ---- scene ----------------------------------------------------------------------------------------
@@ -147,6 +437,8 @@ struct ReferenceScene::Impl {
     std::vector<MeshRecord> meshes;  // indexed by Embree geometry id
     std::vector<Sphere> spheres;
     std::vector<Plane> planes;
+    std::vector<std::unique_ptr<SdfObject>> sdfs;
+    mutable SdfCounters sdfCounters;
     glm::dvec3 lo{kInf}, hi{-kInf};
     double extent = 1.0;
     bool committed = false;
@@ -260,6 +552,108 @@ void ReferenceScene::addPlane(const glm::dvec3& normal, double offset, int32_t i
     m_impl->planes.push_back({glm::normalize(normal), offset, id});
 }
 
+namespace {
+// Places an SDF object: the inverse and normal matrices; false when `model` is not invertible.
+bool placeSdf(SdfObject& obj, const glm::dmat4& model, int32_t id, uint32_t mask, const char* what,
+              std::string& error) {
+    const glm::dmat3 linear(model);
+    const double det = glm::determinant(linear);
+    const double norm = std::max({glm::length(linear[0]), glm::length(linear[1]), glm::length(linear[2])});
+    if (!finiteMat(model) || !(std::abs(det) > 1e-300) || !(std::abs(det) > 1e-12 * norm * norm * norm)) {
+        error =
+            fmt::format("reference scene: {} of id {}: the transform is not finite and invertible", what, id);
+        return false;
+    }
+    obj.toLocal = glm::inverse(model);
+    obj.normalMatrix = glm::transpose(glm::inverse(linear));
+    obj.id = id;
+    obj.mask = mask;
+    return true;
+}
+}  // namespace
+
+bool ReferenceScene::addShapeProgram(const sdf::ShapeProgram& program, const glm::dmat4& model, int32_t id,
+                                     uint32_t mask, std::string& error) {
+    Impl& m = *m_impl;
+    if (m.committed) {
+        error = "reference scene: addShapeProgram after commit";
+        return false;
+    }
+    std::string why;
+    if (program.records.empty() || !sdf::validateShapeProgram(program.records, why)) {
+        error = fmt::format("reference scene: shape program of id {}: {}", id, why.empty() ? "empty" : why);
+        return false;
+    }
+    auto obj = std::make_unique<SdfObject>();
+    if (!placeSdf(*obj, model, id, mask, "shape program", error)) return false;
+    obj->program = program;
+    // The program's bounds hold the solid; padded so that a root on a side is inside. The scale of
+    // the tolerances is the largest finite extent (1 when none is finite).
+    const sdf::ShapeBounds& b = program.bounds;
+    double scale = 0.0;
+    for (int a = 0; a < 3; ++a) {
+        if (std::isfinite(b.min[a])) scale = std::max(scale, std::abs(b.min[a]));
+        if (std::isfinite(b.max[a])) scale = std::max(scale, std::abs(b.max[a]));
+    }
+    obj->scale = scale > 0.0 ? scale : 1.0;
+    const double pad = 1e-6 * obj->scale;
+    obj->boxMin = b.min - pad;
+    obj->boxMax = b.max + pad;
+    if (b.finite()) {
+        for (int c = 0; c < 8; ++c) {
+            const glm::dvec3 corner((c & 1) ? b.max.x : b.min.x, (c & 2) ? b.max.y : b.min.y,
+                                    (c & 4) ? b.max.z : b.min.z);
+            m.grow(glm::dvec3(model * glm::dvec4(corner, 1.0)));
+        }
+    }
+    m.sdfs.push_back(std::move(obj));
+    return true;
+}
+
+bool ReferenceScene::addSdfField(const sdf::PsdfAsset& field, const glm::dmat4& model, int32_t id,
+                                 uint32_t mask, std::string& error) {
+    Impl& m = *m_impl;
+    if (m.committed) {
+        error = "reference scene: addSdfField after commit";
+        return false;
+    }
+    const sdf::SdfGrid& g = field.grid;
+    if (g.dims.x < 2 || g.dims.y < 2 || g.dims.z < 2 ||
+        g.distances.size() != size_t(g.dims.x) * g.dims.y * g.dims.z || !(g.voxelSize > 0.0)) {
+        error = fmt::format("reference scene: field of id {}: needs at least 2 voxels per axis ({}x{}x{})",
+                            id, g.dims.x, g.dims.y, g.dims.z);
+        return false;
+    }
+    auto obj = std::make_unique<SdfObject>();
+    if (!placeSdf(*obj, model, id, mask, "field", error)) return false;
+    obj->isField = true;
+    obj->grid = std::make_shared<const sdf::PsdfAsset>(field);
+    obj->sampler = std::make_unique<sdf::SdfSampler>(*obj->grid);
+    obj->boxMin = g.voxelCenter(0, 0, 0);
+    obj->boxMax = g.voxelCenter(g.dims.x - 1, g.dims.y - 1, g.dims.z - 1);
+    obj->scale = glm::length(obj->boxMax - obj->boxMin);
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec3 corner((c & 1) ? obj->boxMax.x : obj->boxMin.x,
+                                (c & 2) ? obj->boxMax.y : obj->boxMin.y,
+                                (c & 4) ? obj->boxMax.z : obj->boxMin.z);
+        m.grow(glm::dvec3(model * glm::dvec4(corner, 1.0)));
+    }
+    m.sdfs.push_back(std::move(obj));
+    return true;
+}
+
+ReferenceScene::SdfStats ReferenceScene::sdfStats() const {
+    const SdfCounters& c = m_impl->sdfCounters;
+    return {c.rays.load(), c.iterations.load(), c.unconverged.load()};
+}
+
+void ReferenceScene::resetSdfStats() {
+    SdfCounters& c = m_impl->sdfCounters;
+    c.rays = 0;
+    c.iterations = 0;
+    c.unconverged = 0;
+}
+
 void ReferenceScene::addLight(const ReferenceLight& light) { m_lights.push_back(light); }
 
 bool ReferenceScene::commit(std::string& error) {
@@ -306,6 +700,18 @@ bool ReferenceScene::intersect(const glm::dvec3& o, const glm::dvec3& d, double 
             hit.position = o + t * d;
             hit.geometricNormal = hit.shadingNormal = p.normal;
             hit.id = p.id;
+        }
+    }
+    for (const auto& obj : m.sdfs) {
+        double t;
+        if ((obj->mask & mask) && intersectSdf(*obj, o, d, tMin, best, t, m.sdfCounters) && t < best) {
+            best = t;
+            found = true;
+            hit.t = t;
+            hit.position = o + t * d;
+            const glm::dvec3 local = glm::dvec3(obj->toLocal * glm::dvec4(hit.position, 1.0));
+            hit.geometricNormal = hit.shadingNormal = sdfNormal(*obj, local);
+            hit.id = obj->id;
         }
     }
     if (m.meshes.empty()) return found;
@@ -363,6 +769,8 @@ bool ReferenceScene::occluded(const glm::dvec3& o, const glm::dvec3& d, double t
         if (intersectSphere(s, o, d, tMin, tMax, t)) return true;
     for (const Plane& p : m.planes)
         if (intersectPlane(p, o, d, tMin, tMax, t)) return true;
+    for (const auto& obj : m.sdfs)
+        if ((obj->mask & mask) && intersectSdf(*obj, o, d, tMin, tMax, t, m.sdfCounters)) return true;
     if (m.meshes.empty()) return false;
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
@@ -405,6 +813,76 @@ bool buildFromWorld(const ecs::World& world, const assets::AssetManager& assets,
         const glm::dmat4 model(world.get<ecs::Transform>(e)->worldMatrix);
         const uint32_t mask = kMaskCamera | (mr->castShadows ? kMaskShadow : 0u);
         if (!scene.addMesh(*mesh, model, int32_t(e.index), mask, error)) return false;
+    }
+    // SDF objects from their original geometry.
+    std::vector<std::pair<ecs::Entity, const ecs::SdfRenderer*>> sdfs;
+    for (auto [e, sr, t] : world.view<const ecs::SdfRenderer, const ecs::Transform>()) {
+        (void)t;
+        if (sr.visible && sr.sdf != 0 && sr.source != ecs::SdfSource::None) sdfs.push_back({e, &sr});
+    }
+    std::sort(sdfs.begin(), sdfs.end(), byIndex);
+    std::map<std::string, const assets::MeshData*> loadedMeshes;  // bakeMesh path -> mesh
+    std::vector<std::unique_ptr<assets::MeshData>> ownedMeshes;   // read here (addMesh copies them)
+    for (const auto& [e, sr] : sdfs) {
+        const glm::dmat4 model(world.get<ecs::Transform>(e)->worldMatrix);
+        const uint32_t mask = kMaskCamera | (sr->castShadows ? kMaskShadow : 0u);
+        const int32_t id = int32_t(e.index);
+        switch (sr->source) {
+            case ecs::SdfSource::Shapes: {
+                const sdf::ShapeProgram* program = assets.shapeProgram(sr->sdf);
+                if (!program) {
+                    error =
+                        fmt::format("entity {}: shape program asset {:016x} is not loaded", e.index, sr->sdf);
+                    return false;
+                }
+                if (!scene.addShapeProgram(*program, model, id, mask, error)) return false;
+                break;
+            }
+            case ecs::SdfSource::MeshBake:
+                if (!sr->bakeMesh.empty()) {
+                    // The original mesh: the asset manager's copy of that file when it still holds
+                    // it, otherwise the file read as AssetManager::loadMesh reads it.
+                    auto it = loadedMeshes.find(sr->bakeMesh);
+                    if (it == loadedMeshes.end()) {
+                        const assets::MeshData* mesh = nullptr;
+                        for (const assets::AssetInfo& info : assets.list())
+                            if (info.kind == assets::AssetKind::Mesh && info.sourcePath == sr->bakeMesh &&
+                                (mesh = assets.mesh(info.id)) != nullptr)
+                                break;
+                        if (!mesh) {
+                            auto own = std::make_unique<assets::MeshData>();
+                            std::string why;
+                            if (!assets::loadMesh(sr->bakeMesh, *own, why) ||
+                                !assets::validateMesh(*own, sr->bakeMesh, why)) {
+                                error = fmt::format("entity {}: the baked mesh: {}", e.index, why);
+                                return false;
+                            }
+                            assets::generateNormals(*own);
+                            mesh = own.get();
+                            ownedMeshes.push_back(std::move(own));
+                        }
+                        it = loadedMeshes.emplace(sr->bakeMesh, mesh).first;
+                    }
+                    if (!scene.addMesh(*it->second, model, id, mask, error)) return false;
+                    break;
+                }
+                // A baked in-memory mesh has no file: the baked field is all there is.
+                log::warn(
+                    "reference: entity {}: the baked mesh has no file; the reference is its baked field",
+                    e.index);
+                [[fallthrough]];
+            case ecs::SdfSource::Field: {
+                const sdf::PsdfAsset* field = assets.sdfField(sr->sdf);
+                if (!field) {
+                    error = fmt::format("entity {}: SDF field asset {:016x} is not loaded", e.index, sr->sdf);
+                    return false;
+                }
+                if (!scene.addSdfField(*field, model, id, mask, error)) return false;
+                break;
+            }
+            case ecs::SdfSource::None:
+                break;
+        }
     }
     for (const auto& [e, l] : lights) {
         const ecs::Transform& t = *world.get<ecs::Transform>(e);
@@ -757,10 +1235,16 @@ bool render(const ReferenceScene& scene, const ReferenceCamera& camera, const Re
     };
     uint32_t threads = desc.threads ? desc.threads : std::max(1u, std::thread::hardware_concurrency());
     threads = std::min(threads, tileCount);
+    const uint64_t unconvergedBefore = scene.sdfStats().unconverged;
     std::vector<std::thread> pool;
     for (uint32_t i = 1; i < threads; ++i) pool.emplace_back(worker);
     worker();
     for (std::thread& t : pool) t.join();
+    if (const uint64_t unconverged = scene.sdfStats().unconverged - unconvergedBefore; unconverged > 0)
+        log::warn(
+            "reference: {} ray(s) did not converge on an SDF object within {} sphere-tracing iterations "
+            "(counted as misses)",
+            unconverged, kSdfMaxIterations);
     size_t hits = 0;
     for (const TileStats& ts : tileStats) hits += ts.hits;
     for (size_t a = 0; a < out.size(); ++a) {

@@ -1,7 +1,9 @@
 // The CPU reference renderer (docs/ACCURACY.md): renders a scene from its original geometry —
 // triangle meshes by ray–triangle intersection over Embree's BVH, the hit distance then recomputed
-// in double precision on the hit triangle's plane, and analytic spheres and planes by exact
-// intersection in double precision — into float AOVs with the rasterizer's camera, pixel-centre and
+// in double precision on the hit triangle's plane, analytic spheres and planes by exact
+// intersection in double precision, SDF shape programs by sphere tracing and root bracketing on the
+// double-precision program, MeshBake objects as their original mesh and .psdf fields as their
+// trilinear interpolant — into float AOVs with the rasterizer's camera, pixel-centre and
 // AOV conventions (docs/FORMATS.md, "AOV images"):
 //
 //   depth   linear view depth along the camera's -Z (scene units), 0 where nothing is hit
@@ -47,6 +49,12 @@ namespace penumbra::reference {
 inline constexpr uint32_t kMaskCamera = 1u;  // camera rays and AO rays
 inline constexpr uint32_t kMaskShadow = 2u;  // shadow rays (geometry with castShadows)
 
+// SDF root finding (docs/ACCURACY.md, "SDF objects"): convergence |d| < kSdfTolerance * scale (the
+// object's size in its own frame, at least |p|_inf there), brackets bisected to kSdfTolerance * t,
+// sphere tracing capped at kSdfMaxIterations per ray and object.
+inline constexpr double kSdfTolerance = 1e-12;
+inline constexpr uint32_t kSdfMaxIterations = 100000;
+
 struct Hit {
     double t = 0.0;  // ray parameter of the hit
     glm::dvec3 position{0.0};
@@ -80,11 +88,37 @@ public:
     void addSphere(const glm::dvec3& center, double radius, int32_t id);
     // The plane dot(p, normal) = offset (two-sided, infinite); `normal` is normalised here.
     void addPlane(const glm::dvec3& normal, double offset, int32_t id);
+    // The zero set of a shape program (its own frame placed by `model`: any invertible affine
+    // matrix, non-uniform scale included), found in double precision in the program's frame:
+    // sphere tracing on evaluateShapeProgram (never an overestimate) inside the program's bounds
+    // until |d| < kSdfTolerance * scale or a sign change, then bisection of the bracket to
+    // kSdfTolerance relative in t; the first root along the ray (docs/ACCURACY.md). Normal: the
+    // central-difference gradient of the program, by the inverse transpose. The program is copied.
+    bool addShapeProgram(const sdf::ShapeProgram& program, const glm::dmat4& model, int32_t id, uint32_t mask,
+                         std::string& error);
+    // The zero set of a field's trilinear interpolant (sdf::SdfSampler::trilinear between voxel
+    // centres, the values as stored) inside the box of voxel centres, placed by `model`: the
+    // interpolant is a cubic along the ray in each cell, whose first root is bracketed between the
+    // cubic's turning points and bisected to kSdfTolerance relative. A ray entering the box where
+    // the interpolant is negative hits the box. The field is copied; every axis needs >= 2 voxels.
+    bool addSdfField(const sdf::PsdfAsset& field, const glm::dmat4& model, int32_t id, uint32_t mask,
+                     std::string& error);
     void addLight(const ReferenceLight& light);
     // Builds the BVH; call once after the add* calls and before any query.
     bool commit(std::string& error);
 
     const std::vector<ReferenceLight>& lights() const { return m_lights; }
+
+    // Root finding on SDF objects (shape programs, fields) since commit / the last reset: rays
+    // tested against an SDF object's bounds, sphere-tracing iterations, and the rays that reached
+    // kSdfMaxIterations without converging (counted as misses; report them).
+    struct SdfStats {
+        uint64_t rays = 0;
+        uint64_t iterations = 0;
+        uint64_t unconverged = 0;
+    };
+    SdfStats sdfStats() const;
+    void resetSdfStats();
     // Offset of secondary-ray origins along the normal at `p` (docs/ACCURACY.md):
     // 1e-5 * max(|p|_inf, extent of the finite geometry's bounds).
     double rayOffset(const glm::dvec3& p) const;
@@ -105,6 +139,12 @@ private:
 
 // Meshes of the visible MeshRenderers (id = entity index; kMaskShadow only with castShadows) and the
 // lights with castShadows, both in ascending entity index. Transforms must be up to date.
+// Visible SdfRenderers (with an `sdf` asset; ids and masks as meshes) from their original geometry:
+//   Shapes    the ShapeProgram asset, exactly (addShapeProgram);
+//   MeshBake  the mesh file `bakeMesh` as a triangle mesh (the asset manager's copy when it still
+//             holds that file's mesh, otherwise read with assets::loadMesh + generateNormals);
+//             without a path (a baked in-memory mesh) the baked field's interpolant, logged;
+//   Field     a .psdf has no original geometry: its own trilinear interpolant (addSdfField).
 bool buildFromWorld(const ecs::World& world, const assets::AssetManager& assets, ReferenceScene& scene,
                     std::string& error);
 
