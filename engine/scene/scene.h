@@ -63,7 +63,7 @@ bool parseTraceQuality(std::string_view text, TraceQuality& out);
 
 struct TraceSettings {
     uint32_t maxSteps = 128;      // step limit per ray (an object's own maxSteps may raise it)
-    uint32_t refineSteps = 1;     // plain steps on the raw field after a hit (lands on the surface)
+    uint32_t refineSteps = 2;     // steps on the raw distance after a hit (plain, then secant)
     float hitEpsilon = 0.5f;      // hit when the distance is below this many pixel footprints
     float normalEpsilon = 0.5f;   // gradient step for normals, pixel footprints
     float overRelaxation = 1.3f;  // Keinert's omega (1 = plain sphere tracing), in [1, 2)

@@ -19,7 +19,8 @@
 //                   one is taken back (safe fallback) and omega drops to 1 for the rest of the ray
 //   fieldSafety     times the trilinear interpolation bound subtracted from field distances: 1
 //                   never steps through the baked surface, 0 trusts the interpolated value
-//   refineSteps     after a hit, plain steps (each at most one voxel) on the raw field value
+//   refineSteps     after a hit, steps on the raw distance of the hit object (a plain step, then
+//                   secant steps along the ray; each at most one voxel) onto its surface
 #pragma once
 
 #include "engine/scene/scene.h"

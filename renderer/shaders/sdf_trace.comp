@@ -11,11 +11,19 @@
 //  3. sphere tracing with over-relaxation (Keinert et al. 2014): steps of omega * d while the
 //     unbounding spheres of consecutive points overlap; when they do not, the step returns to the
 //     previous point plus its plain (safe) step and omega becomes 1 for the rest of the ray;
-//  4. a hit is d < hitEpsilon pixel footprints at the current distance; if the step limit runs out,
-//     the point with the smallest d / t (screen-space error) is kept when that error is within 4x
-//     the hit threshold (Keinert's hit selection), else the pixel is a miss;
-//  5. refinement: up to refineSteps plain steps on the raw field value (no interpolation safety),
-//     each at most one voxel, land the hit on the interpolated surface instead of in front of it;
+//  4. a hit candidate is d < hitEpsilon pixel footprints at the current distance (at least a few
+//     float ulps of the point's coordinates), d the safe distance and, for a field, then also its
+//     raw (interpolated) value — when only the safe one is below, the ray goes on with plain steps
+//     on the raw value; a ray inside a solid (d <= 0, e.g. a camera inside an object) hits where it
+//     is; if the step limit runs out, the point with the smallest d / t (screen-space error) is kept
+//     when that error is within 4x the hit threshold (Keinert's hit selection), else the pixel is a
+//     miss;
+//  5. refinement: up to refineSteps steps on the raw distance of the candidate's object (no
+//     interpolation safety) — a plain step, then secant steps along the ray, each at most one
+//     voxel — land the hit on the (interpolated) surface instead of up to hitEpsilon in front of
+//     it; a candidate whose |distance| does not fall below hitEpsilon / 10 is a near miss (the ray
+//     passes the surface within hitEpsilon) and the march goes on (refineSteps 0: every candidate
+//     is a hit); steps counts every evaluation and never exceeds the step limit;
 //  6. the normal is the gradient of the hit object's world distance by central differences over
 //     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
 //     distance from the origin, for float precision, and for fields at least half a voxel);
@@ -61,25 +69,34 @@ vec2 g_interval[kListSize];
 int g_count;
 bool g_overflow;
 
-// Distance to the nearest object at world point p; `nearest` is its object. Objects whose box the
+// Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
+// of the other objects' distances. Objects whose box the
 // ray had left before `tFrom` (the point the last step started from) are skipped: the step from
 // tFrom to here may have crossed a box the current point is already past, and the over-relaxation
 // check needs every surface near that segment. An object whose box is farther than the best
 // distance so far is not evaluated. (Each call site of the distance code is inlined by the
 // compiler, so the shader keeps few of them: this loop, the normal's and the refinement's.)
-float sceneDistance(vec3 p, float tFrom, float safety, out uint nearest) {
+float sceneDistance(vec3 p, float tFrom, float safety, out uint nearest, out float second) {
     float d = 3.0e38;
+    second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
     int count = g_overflow ? int(trace.counts.x) : g_count;
     for (int i = 0; i < count; ++i) {
         if (!g_overflow && tFrom > g_interval[i].y) continue;  // the ray had left this box for good
         uint obj = g_overflow ? uint(i) : g_list[i];
         vec3 pl = sdfToLocal(obj, p);
-        if (sdfBoxDistance(obj, pl) >= d) continue;  // cannot be nearer than the best so far
+        float box = sdfBoxDistance(obj, pl);
+        if (box >= d) {  // cannot be nearer than the best so far; its box bounds `second`
+            second = min(second, box);
+            continue;
+        }
         float di = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, safety);
         if (di < d) {
+            second = d;
             d = di;
             nearest = obj;
+        } else {
+            second = min(second, di);
         }
     }
     return d;
@@ -147,7 +164,8 @@ void main() {
         uint bestObject = 0xffffffffu;
         for (; steps < stepLimit && t <= tMax; ++steps) {
             uint nearest;
-            float d = sceneDistance(ro + rd * t, min(prevT, t), safety, nearest);
+            float second;
+            float d = sceneDistance(ro + rd * t, min(prevT, t), safety, nearest, second);
             float radius = abs(d);
             bool sorFail = omega > 1.0 && radius + prevRadius < stepLength;
             if (sorFail) {
@@ -159,11 +177,67 @@ void main() {
                 prevT = t;
                 continue;
             }
-            float eps = max(trace.epsilons.x * footprint * t, 1e-6 * t);
+            // At least a few float ulps of the point's coordinates (scenes far from the origin)
+            // and of the distance travelled.
+            vec3 pa = abs(ro + rd * t);
+            float eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
             if (d < eps) {
-                hit = true;
-                hitObject = nearest;
-                break;
+                // Within eps of a surface by the safe distance. A field's safe distance lies up to
+                // its interpolation bound below the interpolated one, so the raw value decides.
+                float raw = d;
+                if (safety > 0.0 && sdfObjectVoxel(nearest) > 0.0) raw = sdfObjectDistance(nearest, ro + rd * t, 0.0);
+                ++steps;
+                if (raw <= 0.0) {
+                    // Inside the solid (a ray that starts inside, e.g. a camera in an object or
+                    // behind the near plane's cut): a hit where it is.
+                    hit = true;
+                    hitObject = nearest;
+                    break;
+                }
+                if (raw < eps) {
+                    // A candidate: refine onto the surface (a plain step, then secant steps along
+                    // the ray, exact for a plane at any angle where plain steps crawl at grazing
+                    // angles; each at most one voxel, or twice the first distance for shapes). A
+                    // ray that passes within eps without reaching the surface does not converge:
+                    // a near miss, not a hit (silhouettes are not widened by eps). Accepted: |d|
+                    // below eps / 10.
+                    float voxel = sdfObjectVoxel(nearest);
+                    float limit = voxel > 0.0 ? voxel : 2.0 * max(abs(raw), eps);
+                    float tr = t, dr = raw, prevRefT = t, prevRefD = raw;
+                    for (uint r = 0u; r < trace.counts.w && steps < stepLimit && abs(dr) > 1e-6 * tr; ++r) {
+                        float step = dr;
+                        if (r > 0u && (dr - prevRefD) * (tr - prevRefT) < 0.0)
+                            step = -dr * (tr - prevRefT) / (dr - prevRefD);
+                        prevRefT = tr;
+                        prevRefD = dr;
+                        tr += clamp(step, -limit, limit);
+                        dr = sdfObjectDistance(nearest, ro + rd * tr, 0.0);
+                        ++steps;
+                    }
+                    // (With no refinement, or when the step limit cut it short, the candidate stands.)
+                    if (trace.counts.w == 0u || steps >= stepLimit || abs(dr) <= 0.1 * eps) {
+                        hit = true;
+                        hitObject = nearest;
+                        t = max(tr, tMin);
+                        break;
+                    }
+                }
+                // Not on the surface (yet): a plain step on the raw value (never past the other
+                // objects' safe distance), without over-relaxation from here on. A near miss stays
+                // the best candidate for the step-limit rule (a ray stuck in a gap narrower than
+                // the hit epsilon then hits where it entered it instead of showing a hole).
+                float nearErr = raw / max(t, 1e-6);
+                if (nearErr < bestError) {
+                    bestError = nearErr;
+                    bestT = t;
+                    bestObject = nearest;
+                }
+                omega = 1.0;
+                prevRadius = 0.0;
+                stepLength = 0.0;
+                prevT = t;
+                t += max(min(raw, second), 0.5 * eps);
+                continue;
             }
             float err = d / max(t, 1e-6);
             if (err < bestError) {
@@ -182,19 +256,7 @@ void main() {
             t = bestT;
             hitObject = bestObject;
         }
-        if (hit) {
-            // Refinement onto the raw (interpolated) surface of the hit object.
-            float voxel = sdfObjectVoxel(hitObject);
-            float limit = voxel > 0.0 ? voxel : 3.0e38;
-            for (uint r = 0u; r < trace.counts.w; ++r) {
-                float d = sdfObjectDistance(hitObject, ro + rd * t, 0.0);
-                float eps = 1e-6 * t;
-                if (abs(d) <= eps) break;
-                t += clamp(d, -limit, limit);
-            }
-            t = max(t, tMin);
-            hit = t <= tMax;
-        }
+        hit = hit && t <= tMax;
     }
 
     vec3 p = ro + rd * t;

@@ -1119,6 +1119,11 @@ void compareOverRelaxation(rhi::Device& device, std::optional<scene::TraceQualit
     ASSERT_GT(omega, 1.0f) << "the scene's preset over-relaxes";
     const GBuffer a = frame(omega, "over-relaxed");
     const GBuffer b = frame(1.0f, "omega 1");
+    // Two traces agree to the preset's accuracy: a hit lands within hitEpsilon / 10 footprints of
+    // the surface (sdf_trace.comp), 1e-3 of the depth or better at reference quality (0.01
+    // footprints); medium (0.5 footprints) is ~1e-3 of the depth head-on and more at grazing angles,
+    // so 1e-2 there.
+    const double tol = sc.settings.quality == scene::TraceQuality::Reference ? 1e-3 : 1e-2;
     uint64_t both = 0, within = 0, onlyOne = 0;
     double stepsA = 0, stepsB = 0, hitStepsA = 0, hitStepsB = 0, maxRel = 0;
     for (size_t i = 0; i < a.depth.size(); ++i) {
@@ -1131,12 +1136,12 @@ void compareOverRelaxation(rhi::Device& device, std::optional<scene::TraceQualit
         hitStepsB += b.aux[i].y;
         const double rel = std::abs(double(a.depth[i]) - double(b.depth[i])) / double(b.depth[i]);
         maxRel = std::max(maxRel, rel);
-        within += rel <= 1e-3;
+        within += rel <= tol;
     }
     const double n = double(a.depth.size());
     std::printf(
         "  omega %.2f vs 1: mean steps per pixel %.3f vs %.3f (ratio %.3f); per pixel hit in both %.3f vs "
-        "%.3f (ratio %.3f); depth within 1e-3 rel on %.4f %% of %llu px hit in both (max rel diff %.3g); "
+        "%.3f (ratio %.3f); depth within the tolerance on %.4f %% of %llu px hit in both (max rel diff %.3g); "
         "%llu px "
         "hit in one only\n",
         omega, stepsA / n, stepsB / n, stepsA / stepsB, hitStepsA / double(both), hitStepsB / double(both),
@@ -1178,7 +1183,7 @@ void compareOverRelaxation(rhi::Device& device, std::optional<scene::TraceQualit
             ref.entity[i]);
     }
     EXPECT_GE(double(within) / double(both), 0.99)
-        << "depth within 1e-3 relative on >= 99 % of pixels hit in both";
+        << "depth within " << tol << " relative on >= 99 % of pixels hit in both";
     EXPECT_LE(stepsA, stepsB) << "over-relaxation does not add steps per pixel";
 }
 
