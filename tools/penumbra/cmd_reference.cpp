@@ -174,6 +174,9 @@ int runReference(const ReferenceOptions& opt) {
     report["aoMaxDistance"] = jsonNumber(aoDistance);  // null: unbounded
     report["seed"] = opt.seed;
     report["seconds"] = seconds;
+    const reference::ReferenceScene::SdfStats sdfStats = refScene->sdfStats();
+    report["sdf"] = {
+        {"rays", sdfStats.rays}, {"iterations", sdfStats.iterations}, {"unconverged", sdfStats.unconverged}};
     report["images"] = nlohmann::json::array();
     for (size_t i = 0; i < images.size(); ++i) {
         const reference::AovImage& img = images[i];
