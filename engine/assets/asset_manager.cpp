@@ -793,32 +793,6 @@ AssetId AssetManager::loadPsdf(const std::string& path, std::string& error) {
 
 namespace {
 
-const char* bakeQualityName(sdf::BakeQuality q) {
-    switch (q) {
-        case sdf::BakeQuality::Low:
-            return "low";
-        case sdf::BakeQuality::Medium:
-            return "medium";
-        case sdf::BakeQuality::High:
-            return "high";
-    }
-    return "medium";
-}
-
-sdf::PsdfSign psdfSignOf(sdf::SignMethod m) {
-    switch (m) {
-        case sdf::SignMethod::Winding:
-            return sdf::PsdfSign::Winding;
-        case sdf::SignMethod::Pseudonormal:
-            return sdf::PsdfSign::Pseudonormal;
-        case sdf::SignMethod::Parity:
-            return sdf::PsdfSign::Parity;
-        case sdf::SignMethod::Auto:
-            break;
-    }
-    return sdf::PsdfSign::Unknown;
-}
-
 // Bumped whenever the baker's output for the same mesh and settings changes, so older cache files
 // are never read (their names no longer match).
 constexpr int kSdfBakeCacheVersion = 1;
@@ -831,7 +805,7 @@ constexpr uint64_t kMaxPsdfFileBytes = uint64_t(1) << 33;
 std::string AssetManager::bakeSettingsKey(const sdf::BakeSettings& settings) {
     return fmt::format("v{}:res={}:vs={:.17g}:pad={}:sign={}:q={}:flip={}", kSdfBakeCacheVersion,
                        settings.resolution, settings.resolution ? 0.0 : settings.voxelSize, settings.padding,
-                       sdf::toString(settings.sign), bakeQualityName(settings.quality),
+                       sdf::toString(settings.sign), sdf::toString(settings.quality),
                        settings.flipInsideOut ? 1 : 0);
 }
 
@@ -917,7 +891,7 @@ AssetId AssetManager::bakeSdf(AssetId meshId, const sdf::BakeSettings& settings,
         const sdf::MeshDiagnostics& diag = result.diagnostics;
         sdf::PsdfWriteOptions wo;
         wo.encoding = sdf::PsdfEncoding::F32;
-        wo.sign = psdfSignOf(result.signUsed);
+        wo.sign = sdf::psdfSign(result.signUsed);
         wo.closedManifold = diag.closedManifold;
         wo.boundaryEdges = diag.boundaryEdges > 0;
         wo.nonManifold = diag.nonManifoldEdges > 0;

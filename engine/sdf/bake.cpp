@@ -47,6 +47,32 @@
 
 namespace penumbra::sdf {
 
+const char* toString(BakeQuality q) {
+    switch (q) {
+        case BakeQuality::Low:
+            return "low";
+        case BakeQuality::Medium:
+            return "medium";
+        case BakeQuality::High:
+            return "high";
+    }
+    return "medium";
+}
+
+PsdfSign psdfSign(SignMethod m) {
+    switch (m) {
+        case SignMethod::Winding:
+            return PsdfSign::Winding;
+        case SignMethod::Pseudonormal:
+            return PsdfSign::Pseudonormal;
+        case SignMethod::Parity:
+            return PsdfSign::Parity;
+        case SignMethod::Auto:
+            break;
+    }
+    return PsdfSign::Unknown;
+}
+
 const char* toString(SignMethod m) {
     switch (m) {
         case SignMethod::Auto:

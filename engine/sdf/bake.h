@@ -9,6 +9,7 @@
 
 #include "engine/assets/mesh.h"
 #include "engine/sdf/mesh_topology.h"
+#include "engine/sdf/psdf.h"
 #include "engine/sdf/sdf_grid.h"
 
 namespace penumbra::sdf {
@@ -18,6 +19,9 @@ const char* toString(SignMethod m);
 bool parseSignMethod(const std::string& text, SignMethod& out);
 
 enum class BakeQuality { Low, Medium, High };  // automatic resolution only
+const char* toString(BakeQuality q);           // "low", "medium", "high"
+// The .psdf flag for the sign method a bake used (Auto, never a result, gives Unknown).
+PsdfSign psdfSign(SignMethod m);
 
 struct BakeSettings {
     uint32_t resolution = 0;  // voxels along the longest axis of the padded grid (0 = see voxelSize)

@@ -41,6 +41,14 @@ constexpr uint64_t kMaxUpdateBytes = 65536;
 
 }  // namespace
 
+fg::BufferRef uploadBuffer(fg::PassBuilder& b, const char* name, uint64_t size, uint64_t& bytes) {
+    rhi::BufferDesc desc;
+    desc.size = size;
+    desc.debugName = name;
+    bytes += size;
+    return b.write(b.createBuffer(name, desc), rhi::Access::CopyDst);
+}
+
 void updateChunked(rhi::CommandList& cmd, rhi::BufferHandle dst, const void* data, uint64_t size) {
     const auto* bytes = static_cast<const uint8_t*>(data);
     for (uint64_t offset = 0; offset < size; offset += kMaxUpdateBytes)
@@ -227,11 +235,7 @@ void addSceneUpload(FrameContext& fc, const SceneFrameData& data) {
         "scene_upload", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, SceneBuffers& d) {
             auto buffer = [&](const char* name, uint64_t size) {
-                rhi::BufferDesc desc;
-                desc.size = size;
-                desc.debugName = name;
-                d.bytes += size;
-                return b.write(b.createBuffer(name, desc), rhi::Access::CopyDst);
+                return uploadBuffer(b, name, size, d.bytes);
             };
             d.view = buffer("scene.view", sizeof(GpuView));
             d.scene = buffer("scene.constants", sizeof(GpuScene));

@@ -68,6 +68,10 @@ private:
     rhi::TextureHandle m_white;
 };
 
+// A transient per-frame storage buffer of a transfer pass, written by it (CopyDst); adds `size` to
+// `bytes`.
+fg::BufferRef uploadBuffer(fg::PassBuilder& b, const char* name, uint64_t size, uint64_t& bytes);
+
 // Command-list buffer updates of any size (split into vkCmdUpdateBuffer-sized pieces).
 void updateChunked(rhi::CommandList& cmd, rhi::BufferHandle dst, const void* data, uint64_t size);
 

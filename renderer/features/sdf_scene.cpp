@@ -71,11 +71,7 @@ void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
         "sdf_upload", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, SdfSceneBuffers& d) {
             auto buffer = [&](const char* name, uint64_t size) {
-                rhi::BufferDesc desc;
-                desc.size = size;
-                desc.debugName = name;
-                d.bytes += size;
-                return b.write(b.createBuffer(name, desc), rhi::Access::CopyDst);
+                return uploadBuffer(b, name, size, d.bytes);
             };
             d.objects = buffer("sdf.objects", arrayBytes(data.objects));
             d.records = buffer("sdf.records", arrayBytes(data.records));

@@ -44,6 +44,7 @@
 #include "renderer/features/lighting_reference.h"
 #include "renderer/features/sdf_scene.h"
 #include "renderer/scene_renderer.h"
+#include "support/log_capture.h"
 #include "support/test_device.h"
 
 namespace penumbra::test {
@@ -825,27 +826,6 @@ TEST_P(SdfTrace, CameraExactlyOnASurface) {
     }
 }
 
-// Captures the engine log's warnings for the lifetime of the object.
-struct WarningCapture {
-    std::mutex mutex;
-    std::vector<std::string> warnings;
-    log::Sink previous;
-    WarningCapture() {
-        previous = log::setSink([this](log::Severity s, std::string_view m) {
-            if (s != log::Severity::Warning) return;
-            std::lock_guard lock(mutex);
-            warnings.emplace_back(m);
-        });
-    }
-    ~WarningCapture() { log::setSink(previous); }
-    size_t count(const std::string& needle) {
-        std::lock_guard lock(mutex);
-        return size_t(std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
-            return w.find(needle) != std::string::npos;
-        }));
-    }
-};
-
 // A good sphere and a box named 'broken' with an unusable transform: two frames of a new renderer
 // render, the box is skipped with exactly one warning naming it, the sphere is drawn.
 void expectSkippedWithOneWarning(rhi::Device& device, glm::vec3 position, glm::vec3 scale) {
@@ -1141,7 +1121,8 @@ void compareOverRelaxation(rhi::Device& device, std::optional<scene::TraceQualit
     const double n = double(a.depth.size());
     std::printf(
         "  omega %.2f vs 1: mean steps per pixel %.3f vs %.3f (ratio %.3f); per pixel hit in both %.3f vs "
-        "%.3f (ratio %.3f); depth within the tolerance on %.4f %% of %llu px hit in both (max rel diff %.3g); "
+        "%.3f (ratio %.3f); depth within the tolerance on %.4f %% of %llu px hit in both (max rel diff "
+        "%.3g); "
         "%llu px "
         "hit in one only\n",
         omega, stepsA / n, stepsB / n, stepsA / stepsB, hitStepsA / double(both), hitStepsB / double(both),

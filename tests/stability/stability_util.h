@@ -32,9 +32,12 @@
 #include "engine/sdf/shape_program.h"
 #include "renderer/core/gbuffer_encoding.h"
 #include "renderer/scene_renderer.h"
+#include "support/log_capture.h"
 #include "support/test_device.h"
 
 namespace penumbra::test::stability {
+
+using test::WarningCapture;
 
 constexpr float kFovY = 1.0471976f;  // 60 degrees
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -328,27 +331,6 @@ inline double quantile(std::vector<double> v, double q) {
     std::nth_element(v.begin(), v.begin() + long(k), v.end());
     return v[k];
 }
-
-// Captures the engine log's warnings while alive.
-struct WarningCapture {
-    std::mutex mutex;
-    std::vector<std::string> warnings;
-    log::Sink previous;
-    WarningCapture() {
-        previous = log::setSink([this](log::Severity s, std::string_view m) {
-            if (s != log::Severity::Warning) return;
-            std::lock_guard lock(mutex);
-            warnings.emplace_back(m);
-        });
-    }
-    ~WarningCapture() { log::setSink(previous); }
-    size_t count(const std::string& needle) {
-        std::lock_guard lock(mutex);
-        return size_t(std::count_if(warnings.begin(), warnings.end(), [&](const std::string& w) {
-            return w.find(needle) != std::string::npos;
-        }));
-    }
-};
 
 // Wall time of a scope in ms.
 struct Stopwatch {

@@ -28,32 +28,6 @@ double msSince(Clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-sdf::PsdfSign toPsdfSign(sdf::SignMethod m) {
-    switch (m) {
-        case sdf::SignMethod::Winding:
-            return sdf::PsdfSign::Winding;
-        case sdf::SignMethod::Pseudonormal:
-            return sdf::PsdfSign::Pseudonormal;
-        case sdf::SignMethod::Parity:
-            return sdf::PsdfSign::Parity;
-        case sdf::SignMethod::Auto:
-            break;
-    }
-    return sdf::PsdfSign::Unknown;
-}
-
-const char* toString(sdf::BakeQuality q) {
-    switch (q) {
-        case sdf::BakeQuality::Low:
-            return "low";
-        case sdf::BakeQuality::Medium:
-            return "medium";
-        case sdf::BakeQuality::High:
-            return "high";
-    }
-    return "medium";
-}
-
 nlohmann::ordered_json vec3Json(const glm::dvec3& v) {
     return nlohmann::ordered_json::array({v.x, v.y, v.z});
 }
@@ -112,7 +86,7 @@ sdf::PsdfWriteOptions psdfWriteOptions(const sdf::BakeResult& result, sdf::PsdfE
     sdf::PsdfWriteOptions wo;
     wo.encoding = encoding;
     wo.bandWidth = encoding == sdf::PsdfEncoding::U8 ? bandWidthVoxels * result.grid.voxelSize : 0.0;
-    wo.sign = toPsdfSign(result.signUsed);
+    wo.sign = sdf::psdfSign(result.signUsed);
     wo.closedManifold = diag.closedManifold;
     wo.boundaryEdges = diag.boundaryEdges > 0;
     wo.nonManifold = diag.nonManifoldEdges > 0;
@@ -193,7 +167,7 @@ nlohmann::ordered_json bakeReport(const BakeOptions& opt, const std::string& com
         {"padding", opt.padding},
         {"sign", opt.sign},
         {"threads", opt.threads},
-        {"quality", toString(outcome.quality)},
+        {"quality", sdf::toString(outcome.quality)},
         {"encoding", opt.encoding},
         {"bandWidthVoxels", outcome.encoding == sdf::PsdfEncoding::U8
                                 ? nlohmann::ordered_json(opt.bandWidthVoxels)
@@ -224,7 +198,7 @@ void printBakeSummary(const BakeOptions& opt, const sdf::BakeResult& result, con
     const uint32_t longest = std::max({grid.dims.x, grid.dims.y, grid.dims.z});
     const std::string sourceText = opt.resolution || opt.voxelSize > 0
                                        ? fmt::format("from {}", resolutionSource(opt))
-                                       : fmt::format("automatic, quality {}", toString(outcome.quality));
+                                       : fmt::format("automatic, quality {}", sdf::toString(outcome.quality));
     fmt::print("grid        {} x {} x {}, voxel size {:.6g} ({} along the longest axis, {}; padding {})\n",
                grid.dims.x, grid.dims.y, grid.dims.z, grid.voxelSize, longest, sourceText, opt.padding);
     if (opt.sign == "auto")
