@@ -512,6 +512,8 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
                     "Processed-asset cache folder, for fields baked at load (default: $PENUMBRA_CACHE_DIR, "
                     "$XDG_CACHE_HOME/penumbra or ~/.cache/penumbra)");
     cmd->add_flag("--no-cache", opt.noCache, "Do not read or write the processed-asset cache");
+    out.accuracyOptions = std::make_shared<BenchAccuracyOptions>();
+    out.accuracy = addBenchAccuracyCommand(*out.group, *out.accuracyOptions);
     return out;
 }
 

@@ -10,13 +10,17 @@
 //     median of both, and the mean sphere-trace steps per pixel of both (gbuffer.aux y of one extra
 //     frame each: over the pixels where an SDF was hit, and over all pixels) with their ratio.
 //     Progress goes to stderr; --csv / --markdown are written all or nothing.
+//   bench accuracy [--scenes a.json,...] [...] -o DIR   speed against error (cmd_bench_accuracy.h)
 // Exit codes: 0 ok, 1 runtime error (bad scene, device failure, unwritable output), 2 usage.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
 
 #include <CLI/CLI.hpp>
+
+#include "cmd_bench_accuracy.h"
 
 namespace penumbra::cli {
 
@@ -35,8 +39,10 @@ struct BenchTraceOptions {
 };
 
 struct BenchCommands {
-    CLI::App* group = nullptr;  // `bench`
-    CLI::App* trace = nullptr;  // `bench trace`
+    CLI::App* group = nullptr;     // `bench`
+    CLI::App* trace = nullptr;     // `bench trace`
+    CLI::App* accuracy = nullptr;  // `bench accuracy` (cmd_bench_accuracy.h)
+    std::shared_ptr<BenchAccuracyOptions> accuracyOptions;
 };
 
 BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& traceOpt);
