@@ -57,6 +57,8 @@ Rendered renderScene(rhi::Device& device, const SceneCase& sc) {
     }
     EngineDesc desc;
     desc.loadStaticPlugins = false;
+    // The default scene bakes three meshes on load: the tests share one (validated) bake cache.
+    desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";
     auto engine = Engine::create(desc, r.error);
     if (!engine || !engine->loadScene(path, r.error)) return r;
     std::string loopError;

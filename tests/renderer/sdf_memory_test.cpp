@@ -110,6 +110,7 @@ TEST_P(SdfMemory, OneObjectSceneHasAFarSmallerAtlasThanTheDefaultScene) {
     std::string error;
     EngineDesc desc;
     desc.loadStaticPlugins = false;
+    desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";  // the default scene's bakes, shared by the tests
     std::unique_ptr<Engine> full = Engine::create(desc, error);
     ASSERT_TRUE(full && full->loadScene(PENUMBRA_SOURCE_DIR "/scenes/default.json", error)) << error;
     render::SceneRenderer rf(dev());
