@@ -467,49 +467,76 @@ int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend bac
     scene::RenderSettings& settings = engine.settings();
     const scene::RenderSettings original = settings;
     const std::string label = fmt::format("{} {}", scenePath, name);
-    fmt::print(stderr, "[{}] {}, {}x{}: {} settings, {} warm-up + {} timed frames each\n", label, device,
-               opt.width, opt.height, sweep.size(), opt.warmup, opt.frames);
+    fmt::print(
+        stderr,
+        "[{}] {}, {}x{}: {} settings; {} warm-up frame(s) each, then {} round(s) of one timed frame per "
+        "setting\n",
+        label, device, opt.width, opt.height, sweep.size(), opt.warmup, opt.frames);
 
-    for (size_t si = 0; si < sweep.size(); ++si) {
+    auto apply = [&](size_t si) {
         const Setting& s = sweep[si];
         settings.quality = s.quality;
         settings.trace = s.trace;  // the scene's own overrides are dropped: one change from the preset
-        if (!rebaker.empty() && !rebaker.apply(s.bakeResolution, label, error)) {
-            log::error("{}: {}: {}", kCommand, scenePath, error);
-            return 1;
-        }
-        renderer->takeTimings(true);  // drop what earlier frames left
-        std::vector<fg::FrameTimings> timings;
-        const uint32_t total = opt.warmup + opt.frames;
-        for (uint32_t f = 0; f < total; ++f) {
-            if (!renderer->renderFrame(engine, error)) {
-                log::error("{}: {}: {}={}: frame {}: {}", kCommand, label, s.param, s.value, f, error);
-                return 1;
-            }
-            for (fg::FrameTimings& t : renderer->takeTimings(false)) timings.push_back(std::move(t));
-        }
-        for (fg::FrameTimings& t : renderer->takeTimings(true)) timings.push_back(std::move(t));
-        if (timings.size() < total) {
-            log::error("{}: {}: {} frame timings for {} frames", kCommand, label, timings.size(), total);
-            return 1;
-        }
-        std::sort(timings.begin(), timings.end(),
-                  [](const fg::FrameTimings& a, const fg::FrameTimings& b) { return a.frame < b.frame; });
-        std::vector<double> gpu, frame;
-        for (size_t i = timings.size() - opt.frames; i < timings.size(); ++i) {
+        if (rebaker.empty() || rebaker.apply(s.bakeResolution, label, error)) return true;
+        log::error("{}: {}: {}", kCommand, scenePath, error);
+        return false;
+    };
+    // Timings arrive in the order of the frames (one FrameTimings per rendered frame): tags[k] is the
+    // setting of the k-th frame, -1 for untimed frames (warm-up, AOV frames).
+    const size_t count = sweep.size();
+    std::vector<std::vector<double>> gpu(count), frame(count);
+    std::vector<int> tags;
+    size_t received = 0;
+    auto collect = [&](bool wait) {
+        for (const fg::FrameTimings& t : renderer->takeTimings(wait)) {
+            if (received >= tags.size()) return false;
+            const int si = tags[received++];
+            if (si < 0) continue;
             double pass = std::nan(""), sum = 0;
             bool any = false;
-            for (const fg::PassTiming& p : timings[i].passes) {
+            for (const fg::PassTiming& p : t.passes) {
                 if (p.name == kTracePass) pass = p.gpuMs;
                 if (std::isfinite(p.gpuMs)) {
                     sum += p.gpuMs;
                     any = true;
                 }
             }
-            gpu.push_back(pass);
-            frame.push_back(any ? sum : std::nan(""));
+            gpu[size_t(si)].push_back(pass);
+            frame[size_t(si)].push_back(any ? sum : std::nan(""));
         }
+        return true;
+    };
+    auto renderOne = [&](size_t si, bool timed, const char* what) {
+        if (!apply(si)) return false;
+        if (!renderer->renderFrame(engine, error)) {
+            log::error("{}: {}: {}={}: {} frame: {}", kCommand, label, sweep[si].param, sweep[si].value, what,
+                       error);
+            return false;
+        }
+        tags.push_back(timed ? int(si) : -1);
+        if (collect(false)) return true;
+        log::error("{}: {}: more frame timings than frames", kCommand, label);
+        return false;
+    };
+    renderer->takeTimings(true);  // nothing from before
+    // Warm-up per setting (uploads, re-baked fields), then N rounds of one frame per setting, in
+    // alternating order: load changes on a shared machine hit every setting alike.
+    for (size_t si = 0; si < count; ++si)
+        for (uint32_t w = 0; w < opt.warmup; ++w)
+            if (!renderOne(si, false, "warm-up")) return 1;
+    for (uint32_t round = 0; round < opt.frames; ++round) {
+        for (size_t i = 0; i < count; ++i)
+            if (!renderOne(round % 2 ? count - 1 - i : i, true, "timed")) return 1;
+        fmt::print(stderr, "[{}] timed round {}/{} ({} frames)\n", label, round + 1, opt.frames, count);
+    }
+    if (!collect(true)) {
+        log::error("{}: {}: more frame timings than frames", kCommand, label);
+        return 1;
+    }
 
+    for (size_t si = 0; si < count; ++si) {
+        const Setting& s = sweep[si];
+        if (!apply(si)) return 1;
         // One untimed frame with gbuffer.aux (ids, steps) for the AOVs: the same settings and time.
         render::FrameDesc fd;
         fd.camera = scene::findCamera(engine.world(), settings.camera);
@@ -523,6 +550,11 @@ int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend bac
             log::error("{}: {}: {}={}: AOVs: {}", kCommand, label, s.param, s.value, error);
             return 1;
         }
+        tags.push_back(-1);
+        if (!collect(false)) {
+            log::error("{}: {}: more frame timings than frames", kCommand, label);
+            return 1;
+        }
         Row row;
         row.scene = scenePath;
         row.pass = kTracePass;
@@ -533,10 +565,10 @@ int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend bac
         row.baseline = s.bakeResolution ? rebaker.sceneUses(s.bakeResolution)
                                         : sameTrace(settings.resolvedTrace(),
                                                     scene::tracePreset(scene::TraceQuality::Medium));
-        row.gpuMedian = median(gpu);
-        row.frameMedian = median(frame);
-        row.gpuMin = minimum(gpu);
-        row.frameMin = minimum(frame);
+        row.gpuMedian = median(gpu[si]);
+        row.frameMedian = median(frame[si]);
+        row.gpuMin = minimum(gpu[si]);
+        row.frameMin = minimum(frame[si]);
         row.frames = opt.frames;
         double stepSum = 0;
         for (float v : steps.data) stepSum += std::isfinite(v) ? v : 0.0;
@@ -553,7 +585,10 @@ int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend bac
                    num(row.metrics[kNormalMean]));
         rows.push_back(std::move(row));
     }
-    renderer->takeTimings(true);
+    if (!collect(true) || received != tags.size()) {
+        log::error("{}: {}: {} frame timings for {} frames", kCommand, label, received, tags.size());
+        return 1;
+    }
     if (!rebaker.empty()) rebaker.restore();
     settings = original;
     return 0;
@@ -772,10 +807,14 @@ CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
         ->capture_default_str();
     addSizeOption(cmd, "--height", opt.height, "Image height in pixels (1 .. device max)")
         ->capture_default_str();
-    cmd->add_option("--frames", opt.frames, "Timed frames per setting (the CSV gives their median)")
+    cmd->add_option(
+           "--frames", opt.frames,
+           "Timed frames per setting: rounds of one frame per setting, in alternating order (the CSV gives "
+           "their median)")
         ->check(CLI::Range(1u, 100000u))
         ->capture_default_str();
-    cmd->add_option("--warmup", opt.warmup, "Untimed frames before them (uploads, pipeline compilation)")
+    cmd->add_option("--warmup", opt.warmup,
+                    "Untimed frames per setting before the timed rounds (uploads, pipeline compilation)")
         ->check(CLI::Range(0u, 100000u))
         ->capture_default_str();
     cmd->add_option("--sweep", opt.sweep,

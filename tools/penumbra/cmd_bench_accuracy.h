@@ -9,9 +9,11 @@
 // `penumbra reference`) once, at simulated time 0; then, for each setting of the sweep (each trace
 // setting varied alone around the medium preset, the scene's own render.trace overrides dropped:
 // quality preset, maxSteps, hitEpsilon, overRelaxation, fieldSafety, refineSteps and, for scenes
-// with mesh bakes, the bake resolution) and each backend: W warm-up + N timed frames (median GPU ms
-// of the sdf_trace pass and of the whole frame, the sum of its passes), then one untimed frame with
-// gbuffer.aux whose AOVs are compared with the reference (tools/reference/metrics.h):
+// with mesh bakes, the bake resolution) and each backend: W warm-up frames per setting, then N
+// rounds of one timed frame per setting in alternating order (load changes on a shared machine hit
+// every setting alike; median GPU ms of the sdf_trace pass and of the whole frame, the sum of its
+// passes), then per setting one untimed frame with gbuffer.aux whose AOVs are compared with the
+// reference (tools/reference/metrics.h):
 //   depth   relative error |t - r| / r over the pixels hit in both: mean, p99, max, RMSE, the PSNR
 //           of the relative error (peak 1) and the SSIM of depth / max reference depth; the
 //           silhouette mismatch rate; the fraction of pixels hit in both whose entity id differs
