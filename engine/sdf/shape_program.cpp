@@ -1,6 +1,7 @@
 #include "engine/sdf/shape_program.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <utility>
@@ -821,8 +822,23 @@ double evaluateShapeProgram(const ShapeProgram& program, const glm::dvec3& point
         glm::dvec3 p;
         double scale;
     };
-    std::vector<Frame> frames(program.maxFrameStack + 1);
-    std::vector<double> stack(std::max(program.maxDistanceStack, 1u));
+    // The stacks live on the C++ stack for programs within the default limits (16 distances, 8
+    // frames: every program the scene format compiles); larger limits fall back to the heap. The
+    // reference renderer calls this millions of times per image.
+    std::array<Frame, 9> frameBuffer;
+    std::array<double, 16> stackBuffer;
+    std::vector<Frame> frameHeap;
+    std::vector<double> stackHeap;
+    Frame* frames = frameBuffer.data();
+    double* stack = stackBuffer.data();
+    if (program.maxFrameStack + 1 > frameBuffer.size()) {
+        frameHeap.resize(program.maxFrameStack + 1);
+        frames = frameHeap.data();
+    }
+    if (program.maxDistanceStack > stackBuffer.size()) {
+        stackHeap.resize(program.maxDistanceStack);
+        stack = stackHeap.data();
+    }
     size_t fp = 0, sp = 0;
     frames[0] = {point, 1.0};
     const std::vector<ShapeInstruction>& rec = program.records;
