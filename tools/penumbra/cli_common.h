@@ -51,4 +51,17 @@ bool writePngOutput(OutputFiles& outputs, const std::string& path, const ImageRG
 // created, a temporary file next to each destination). Logs the error and returns false.
 bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths, const char* command);
 
+// The processed-asset cache folder: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else
+// ~/.cache/penumbra (empty when none of them is set).
+std::string defaultCacheDir();
+
+// The median of the finite values of `v` (NaN when there is none).
+double median(std::vector<double> v);
+
+// Machine facts for benchmark reports: "1.33 / 1.72 / 2.40 (1 / 5 / 15 min)" from /proc/loadavg
+// ("unknown" when unreadable), the CPU model name, and the current time as "YYYY-MM-DD HH:MM UTC".
+std::string loadAverage();
+std::string cpuModel();
+std::string utcNow();
+
 }  // namespace penumbra::cli

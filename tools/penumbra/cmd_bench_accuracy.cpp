@@ -61,43 +61,6 @@ enum Metric : size_t {
     kMetricCount
 };
 
-std::string defaultCacheDir() {
-    if (const char* env = std::getenv("PENUMBRA_CACHE_DIR"); env && *env) return env;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/penumbra";
-    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/penumbra";
-    return {};
-}
-
-std::string loadAverage() {
-    std::ifstream in("/proc/loadavg");
-    double one = 0, five = 0, fifteen = 0;
-    if (!(in >> one >> five >> fifteen)) return "unknown";
-    return fmt::format("{:.2f} / {:.2f} / {:.2f}", one, five, fifteen);
-}
-
-std::string cpuModel() {
-    std::ifstream in("/proc/cpuinfo");
-    std::string line;
-    while (std::getline(in, line))
-        if (line.rfind("model name", 0) == 0 && line.find(':') != std::string::npos)
-            return line.substr(line.find(':') + 2);
-    return "unknown CPU";
-}
-
-std::string utcNow() {
-    char date[64];
-    const std::time_t now = std::time(nullptr);
-    std::strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", std::gmtime(&now));
-    return date;
-}
-
-double median(std::vector<double> v) {
-    v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-    if (v.empty()) return std::nan("");
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
 double minimum(const std::vector<double>& v) {
     double m = std::nan("");
     for (double x : v)

@@ -21,21 +21,6 @@
 namespace penumbra::cli {
 namespace {
 
-std::string defaultCacheDir() {
-    if (const char* env = std::getenv("PENUMBRA_CACHE_DIR"); env && *env) return env;
-    if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/penumbra";
-    if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/penumbra";
-    return {};
-}
-
-double median(std::vector<double> v) {
-    v.erase(std::remove_if(v.begin(), v.end(), [](double x) { return !std::isfinite(x); }), v.end());
-    if (v.empty()) return std::nan("");
-    std::sort(v.begin(), v.end());
-    const size_t n = v.size();
-    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 struct PassSeries {
     std::string name;
     std::vector<double> gpu, cpu;
