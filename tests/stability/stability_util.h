@@ -33,10 +33,12 @@
 #include "renderer/core/gbuffer_encoding.h"
 #include "renderer/scene_renderer.h"
 #include "support/log_capture.h"
+#include "support/ref_camera.h"
 #include "support/test_device.h"
 
 namespace penumbra::test::stability {
 
+using test::RefCamera;
 using test::WarningCapture;
 
 constexpr float kFovY = 1.0471976f;  // 60 degrees
@@ -218,38 +220,8 @@ inline Sanity checkSanity(const GBuffer& g, float nearPlane, float farPlane) {
     return s;
 }
 
-// ---- the renderer's camera in double ---------------------------------------------------------------
-
-// Gram-Schmidt basis of the camera's (float) world matrix, rays through pixel centres with a unit
-// component along the view direction: the ray parameter of dir() is the linear view depth.
-struct RefCamera {
-    glm::dvec3 eye, forward, right, up;
-    double tanHalf = 0, aspect = 1, nearPlane = 0.1, farPlane = 100;
-    uint32_t w = 0, h = 0;
-
-    RefCamera(const ecs::World& world, ecs::Entity cam, uint32_t width, uint32_t height)
-        : w(width), h(height) {
-        const glm::dmat4 m(world.get<ecs::Transform>(cam)->worldMatrix);
-        const ecs::Camera& c = *world.get<ecs::Camera>(cam);
-        const glm::dvec3 z = glm::normalize(glm::dvec3(m[2]));
-        glm::dvec3 x = glm::dvec3(m[0]);
-        x = glm::normalize(x - z * glm::dot(x, z));
-        forward = -z;
-        right = x;
-        up = glm::cross(z, x);
-        eye = glm::dvec3(m[3]);
-        tanHalf = std::tan(double(c.fovY) * 0.5);
-        aspect = double(width) / double(height);
-        nearPlane = c.nearPlane;
-        farPlane = c.farPlane;
-    }
-    glm::dvec3 dir(uint32_t x, uint32_t y) const {
-        const double nx = (x + 0.5) / w * 2.0 - 1.0, ny = (y + 0.5) / h * 2.0 - 1.0;
-        return forward + nx * aspect * tanHalf * right - ny * tanHalf * up;
-    }
-    // Size of one pixel per unit of linear depth (the trace's footprint: 2 tan(fov/2) / height).
-    double footprint() const { return 2.0 * tanHalf / double(h); }
-};
+// The renderer's camera in double: RefCamera (tests/support/ref_camera.h); the ray parameter of its
+// dir() is the linear view depth.
 
 // ---- exact intersections (double) --------------------------------------------------------------------
 // All take the unnormalised camera ray o + s d (d's forward component 1), return the smallest root
