@@ -163,6 +163,21 @@ bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths,
     return true;
 }
 
+CLI::Option* addBenchBackendOption(CLI::App* cmd, std::string& value) {
+    return cmd->add_option("--backend", value, "vulkan (vk) | gl (opengl) | both: Vulkan, then OpenGL")
+        ->check(CLI::Validator(
+            [](std::string& v) -> std::string {
+                rhi::Backend b;
+                if (v == "both") return {};
+                if (!rhi::parseBackend(v, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null)
+                    return fmt::format("'{}' is not allowed: --backend takes vulkan, vk, gl, opengl or both",
+                                       v);
+                return {};
+            },
+            "vk|gl|both"))
+        ->capture_default_str();
+}
+
 std::string defaultCacheDir() {
     if (const char* env = std::getenv("PENUMBRA_CACHE_DIR"); env && *env) return env;
     if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/penumbra";

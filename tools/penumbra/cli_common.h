@@ -51,6 +51,9 @@ bool writePngOutput(OutputFiles& outputs, const std::string& path, const ImageRG
 // created, a temporary file next to each destination). Logs the error and returns false.
 bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths, const char* command);
 
+// `--backend` of the benchmarks: vulkan (vk), gl (opengl) or both (Vulkan, then OpenGL).
+CLI::Option* addBenchBackendOption(CLI::App* cmd, std::string& value);
+
 // The processed-asset cache folder: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else
 // ~/.cache/penumbra (empty when none of them is set).
 std::string defaultCacheDir();

@@ -440,18 +440,7 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
     cmd->add_option("scene", opt.scene,
                     "Scene file: .json (docs/FORMATS.md), .gltf or .glb; needs sdf objects")
         ->capture_default_str();
-    cmd->add_option("--backend", opt.backend, "vulkan (vk) | gl (opengl) | both: Vulkan, then OpenGL")
-        ->check(CLI::Validator(
-            [](std::string& value) -> std::string {
-                rhi::Backend b;
-                if (value == "both") return {};
-                if (!rhi::parseBackend(value, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null)
-                    return fmt::format("'{}' is not allowed: --backend takes vulkan, vk, gl, opengl or both",
-                                       value);
-                return {};
-            },
-            "vk|gl|both"))
-        ->capture_default_str();
+    addBenchBackendOption(cmd, opt.backend);
     addSizeOption(cmd, "--width", opt.width, "Image width in pixels (1 .. device max)")
         ->capture_default_str();
     addSizeOption(cmd, "--height", opt.height, "Image height in pixels (1 .. device max)")

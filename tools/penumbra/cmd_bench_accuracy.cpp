@@ -754,18 +754,7 @@ CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
                     "Comma-separated scene files (.json, .gltf, .glb) with sdf objects")
         ->delimiter(',')
         ->capture_default_str();
-    cmd->add_option("--backend", opt.backend, "vulkan (vk) | gl (opengl) | both: Vulkan, then OpenGL")
-        ->check(CLI::Validator(
-            [](std::string& value) -> std::string {
-                rhi::Backend b;
-                if (value == "both") return {};
-                if (!rhi::parseBackend(value, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null)
-                    return fmt::format("'{}' is not allowed: --backend takes vulkan, vk, gl, opengl or both",
-                                       value);
-                return {};
-            },
-            "vk|gl|both"))
-        ->capture_default_str();
+    addBenchBackendOption(cmd, opt.backend);
     addSizeOption(cmd, "--width", opt.width, "Image width in pixels (1 .. device max)")
         ->capture_default_str();
     addSizeOption(cmd, "--height", opt.height, "Image height in pixels (1 .. device max)")
