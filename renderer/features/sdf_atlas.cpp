@@ -229,11 +229,18 @@ bool SdfAtlas::upload(const Resident& r, const sdf::PsdfAsset& asset, std::strin
     return true;
 }
 
-bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::PsdfAsset*>>& fields,
-                      std::string& error) {
-    // The wanted set, in first-listed order, validated before anything changes.
-    std::vector<Pending> wanted;
-    std::unordered_map<assets::AssetId, const sdf::PsdfAsset*> seen;
+// Larger fields first (volume, then longest axis): the packing order.
+bool SdfAtlas::largerField(const Pending& a, const Pending& b) {
+    const glm::uvec3 da = a.asset->grid.dims, db = b.asset->grid.dims;
+    const uint64_t va = volume(da), vb = volume(db);
+    if (va != vb) return va > vb;
+    return std::max({da.x, da.y, da.z}) > std::max({db.x, db.y, db.z});
+}
+
+bool SdfAtlas::collectWanted(const std::vector<std::pair<assets::AssetId, const sdf::PsdfAsset*>>& fields,
+                             std::vector<Pending>& wanted,
+                             std::unordered_map<assets::AssetId, const sdf::PsdfAsset*>& seen,
+                             std::string& error) const {
     const uint32_t max3D = m_device.info().limits.maxTextureSize3D;
     for (const auto& [id, asset] : fields) {
         const auto it = seen.find(id);
@@ -261,6 +268,110 @@ bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::Ps
         seen.emplace(id, asset);
         wanted.push_back({id, asset});
     }
+    return true;
+}
+
+// Every wanted field packed again, largest first, into the current size or a larger one (sizes in
+// multiples of kAtlasGranule, the smallest axis grown by half at a time up to the device's maximum).
+bool SdfAtlas::packAll(const std::vector<Pending>& wanted, uint32_t max3D, glm::uvec3& size,
+                       std::vector<Box>& freeBoxes, std::unordered_map<assets::AssetId, Box>& placed,
+                       std::string& error) const {
+    std::vector<Pending> all = wanted;
+    std::stable_sort(all.begin(), all.end(), largerField);
+    const uint32_t cap = std::max(max3D / kAtlasGranule * kAtlasGranule, kAtlasGranule);
+    uint64_t totalVoxels = 0;
+    glm::uvec3 largest(0);
+    for (const Pending& p : all) {
+        totalVoxels += volume(p.asset->grid.dims);
+        largest = glm::max(largest, p.asset->grid.dims);
+    }
+    if (!m_texture.isValid()) size = glm::uvec3(kMinAtlasSize);
+    for (int a = 0; a < 3; ++a) size[a] = std::max(size[a], std::min(cap, roundUpGranule(largest[a])));
+    auto grow = [&] {  // grows the smallest axis that can still grow by half; false when none can
+        int pick = -1;
+        for (int a = 2; a >= 0; --a)
+            if (size[a] < cap && (pick < 0 || size[a] < size[pick])) pick = a;
+        if (pick < 0) return false;
+        size[pick] = std::min(cap, roundUpGranule(size[pick] + size[pick] / 2));
+        return true;
+    };
+    bool ok = true;
+    while (volume(size) < totalVoxels && (ok = grow())) {
+    }
+    while (ok) {
+        freeBoxes.assign(1, Box{glm::uvec3(0), size});
+        placed.clear();
+        bool fits = true;
+        for (const Pending& p : all) {
+            Box b;
+            if (!allocate(freeBoxes, p.asset->grid.dims, b)) {
+                fits = false;
+                break;
+            }
+            placed[p.id] = b;
+        }
+        if (fits) break;
+        ok = grow();
+    }
+    if (!ok) {
+        error = fmt::format(
+            "sdf atlas: {} fields of {} voxels in all do not fit a 3D texture of the device's maximum "
+            "size "
+            "{}^3",
+            all.size(), totalVoxels, cap);
+        return false;
+    }
+    return true;
+}
+
+// A zero-filled texture of `size` replaces the current one (created before anything else changes:
+// a failure leaves the atlas as it was).
+bool SdfAtlas::replaceTexture(const glm::uvec3& size, size_t fieldCount, std::string& error) {
+    rhi::TextureDesc desc;
+    desc.dimension = rhi::TextureDimension::Tex3D;
+    desc.format = m_format;
+    desc.width = size.x;
+    desc.height = size.y;
+    desc.depthOrLayers = size.z;
+    desc.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::CopyDst | rhi::TextureUsage::CopySrc;
+    desc.debugName = "sdf atlas";
+    const rhi::TextureHandle texture = m_device.createTexture(desc);
+    if (!texture.isValid()) {
+        error = fmt::format("sdf atlas: could not create a {}x{}x{} {} texture ({} bytes)", size.x, size.y,
+                            size.z, rhi::formatInfo(m_format).name, rhi::textureBytes(desc));
+        return false;
+    }
+    // Zeros everywhere, in slabs of whole z-slices.
+    const uint64_t slice = uint64_t(size.x) * size.y * rhi::formatInfo(m_format).bytesPerTexel;
+    const uint32_t slabDepth = uint32_t(std::clamp<uint64_t>(kClearChunkBytes / slice, 1, size.z));
+    const std::vector<uint8_t> zeros(slice * slabDepth, 0);
+    for (uint32_t z = 0; z < size.z; z += slabDepth) {
+        rhi::TextureRegion region;
+        region.z = z;
+        region.width = size.x;
+        region.height = size.y;
+        region.depth = std::min(slabDepth, size.z - z);
+        m_device.writeTextureRegion(texture, region, zeros.data(), slice * region.depth);
+    }
+    if (m_texture.isValid()) {
+        ++m_growths;
+        log::info("sdf atlas: grew from {}x{}x{} to {}x{}x{} texels ({} fields, {:.1f} MiB); re-uploading",
+                  m_size.x, m_size.y, m_size.z, size.x, size.y, size.z, fieldCount,
+                  double(rhi::textureBytes(desc)) / (1 << 20));
+        m_device.destroy(m_texture);
+    }
+    m_texture = texture;
+    m_size = size;
+    return true;
+}
+
+bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::PsdfAsset*>>& fields,
+                      std::string& error) {
+    // The wanted set, in first-listed order, validated before anything changes.
+    std::vector<Pending> wanted;
+    std::unordered_map<assets::AssetId, const sdf::PsdfAsset*> seen;
+    if (!collectWanted(fields, wanted, seen, error)) return false;
+    const uint32_t max3D = m_device.info().limits.maxTextureSize3D;
     if (!wanted.empty() && !chooseFormat(error)) return false;
 
     // Plan on copies: keep unchanged residents, free the others, place the newcomers.
@@ -274,13 +385,7 @@ bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::Ps
         const auto it = m_resident.find(p.id);
         if (it == m_resident.end() || it->second.source != p.asset) newcomers.push_back(p);
     }
-    auto larger = [](const Pending& a, const Pending& b) {
-        const glm::uvec3 da = a.asset->grid.dims, db = b.asset->grid.dims;
-        const uint64_t va = volume(da), vb = volume(db);
-        if (va != vb) return va > vb;
-        return std::max({da.x, da.y, da.z}) > std::max({db.x, db.y, db.z});
-    };
-    std::stable_sort(newcomers.begin(), newcomers.end(), larger);
+    std::stable_sort(newcomers.begin(), newcomers.end(), largerField);
 
     std::unordered_map<assets::AssetId, Box> placed;  // new boxes of the fields to upload
     bool repack = !m_texture.isValid() && !wanted.empty();
@@ -295,95 +400,12 @@ bool SdfAtlas::update(const std::vector<std::pair<assets::AssetId, const sdf::Ps
         }
     }
     glm::uvec3 size = m_size;
-    if (repack) {
-        // Every wanted field packed again, largest first, into the current size or a larger one.
-        std::vector<Pending> all = wanted;
-        std::stable_sort(all.begin(), all.end(), larger);
-        const uint32_t cap = std::max(max3D / kAtlasGranule * kAtlasGranule, kAtlasGranule);
-        uint64_t totalVoxels = 0;
-        glm::uvec3 largest(0);
-        for (const Pending& p : all) {
-            totalVoxels += volume(p.asset->grid.dims);
-            largest = glm::max(largest, p.asset->grid.dims);
-        }
-        if (!m_texture.isValid()) size = glm::uvec3(kMinAtlasSize);
-        for (int a = 0; a < 3; ++a) size[a] = std::max(size[a], std::min(cap, roundUpGranule(largest[a])));
-        auto grow = [&] {  // grows the smallest axis that can still grow by half; false when none can
-            int pick = -1;
-            for (int a = 2; a >= 0; --a)
-                if (size[a] < cap && (pick < 0 || size[a] < size[pick])) pick = a;
-            if (pick < 0) return false;
-            size[pick] = std::min(cap, roundUpGranule(size[pick] + size[pick] / 2));
-            return true;
-        };
-        bool ok = true;
-        while (volume(size) < totalVoxels && (ok = grow())) {
-        }
-        while (ok) {
-            freeBoxes.assign(1, Box{glm::uvec3(0), size});
-            placed.clear();
-            bool fits = true;
-            for (const Pending& p : all) {
-                Box b;
-                if (!allocate(freeBoxes, p.asset->grid.dims, b)) {
-                    fits = false;
-                    break;
-                }
-                placed[p.id] = b;
-            }
-            if (fits) break;
-            ok = grow();
-        }
-        if (!ok) {
-            error = fmt::format(
-                "sdf atlas: {} fields of {} voxels in all do not fit a 3D texture of the device's maximum "
-                "size "
-                "{}^3",
-                all.size(), totalVoxels, cap);
-            return false;
-        }
-    }
+    if (repack && !packAll(wanted, max3D, size, freeBoxes, placed, error)) return false;
 
     // A new texture when the size changes (created before anything else changes: a failure leaves
     // the atlas as it was).
-    if (repack && (size != m_size || !m_texture.isValid())) {
-        rhi::TextureDesc desc;
-        desc.dimension = rhi::TextureDimension::Tex3D;
-        desc.format = m_format;
-        desc.width = size.x;
-        desc.height = size.y;
-        desc.depthOrLayers = size.z;
-        desc.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::CopyDst | rhi::TextureUsage::CopySrc;
-        desc.debugName = "sdf atlas";
-        const rhi::TextureHandle texture = m_device.createTexture(desc);
-        if (!texture.isValid()) {
-            error = fmt::format("sdf atlas: could not create a {}x{}x{} {} texture ({} bytes)", size.x,
-                                size.y, size.z, rhi::formatInfo(m_format).name, rhi::textureBytes(desc));
-            return false;
-        }
-        // Zeros everywhere, in slabs of whole z-slices.
-        const uint64_t slice = uint64_t(size.x) * size.y * rhi::formatInfo(m_format).bytesPerTexel;
-        const uint32_t slabDepth = uint32_t(std::clamp<uint64_t>(kClearChunkBytes / slice, 1, size.z));
-        const std::vector<uint8_t> zeros(slice * slabDepth, 0);
-        for (uint32_t z = 0; z < size.z; z += slabDepth) {
-            rhi::TextureRegion region;
-            region.z = z;
-            region.width = size.x;
-            region.height = size.y;
-            region.depth = std::min(slabDepth, size.z - z);
-            m_device.writeTextureRegion(texture, region, zeros.data(), slice * region.depth);
-        }
-        if (m_texture.isValid()) {
-            ++m_growths;
-            log::info(
-                "sdf atlas: grew from {}x{}x{} to {}x{}x{} texels ({} fields, {:.1f} MiB); re-uploading",
-                m_size.x, m_size.y, m_size.z, size.x, size.y, size.z, wanted.size(),
-                double(rhi::textureBytes(desc)) / (1 << 20));
-            m_device.destroy(m_texture);
-        }
-        m_texture = texture;
-        m_size = size;
-    }
+    if (repack && (size != m_size || !m_texture.isValid()) && !replaceTexture(size, wanted.size(), error))
+        return false;
 
     // Apply: free the slots of assets no longer listed, give newcomers a slot, record the boxes.
     for (auto it = m_resident.begin(); it != m_resident.end();) {

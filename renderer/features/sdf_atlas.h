@@ -119,6 +119,15 @@ private:
     };
 
     bool chooseFormat(std::string& error);
+    static bool largerField(const Pending& a, const Pending& b);
+    bool collectWanted(const std::vector<std::pair<assets::AssetId, const sdf::PsdfAsset*>>& fields,
+                       std::vector<Pending>& wanted,
+                       std::unordered_map<assets::AssetId, const sdf::PsdfAsset*>& seen,
+                       std::string& error) const;
+    bool packAll(const std::vector<Pending>& wanted, uint32_t max3D, glm::uvec3& size,
+                 std::vector<Box>& freeBoxes, std::unordered_map<assets::AssetId, Box>& placed,
+                 std::string& error) const;
+    bool replaceTexture(const glm::uvec3& size, size_t fieldCount, std::string& error);
     static bool allocate(std::vector<Box>& freeBoxes, const glm::uvec3& size, Box& out);
     static void release(std::vector<Box>& freeBoxes, const Box& box);
     bool upload(const Resident& r, const sdf::PsdfAsset& asset, std::string& error);
