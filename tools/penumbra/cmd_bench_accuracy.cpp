@@ -730,6 +730,92 @@ std::string findPython(const std::string& given, std::string& tried) {
     return {};
 }
 
+// The Python with matplotlib and the plot script, found before the work. False (logged) on a bad
+// --plot-script / --python; `skipped` says why plots will be skipped (empty: they will be drawn).
+bool findPlotter(const BenchAccuracyOptions& opt, std::string& python, std::string& plotScript,
+                 std::string& skipped) {
+    std::string pythonTried;
+    if (opt.noPlots) {
+        skipped = "--no-plots";
+    } else {
+        plotScript = findPlotScript(opt.plotScript);
+        if (!opt.plotScript.empty() && !fs::is_regular_file(opt.plotScript)) {
+            log::error("{}: --plot-script {}: no such file", kCommand, opt.plotScript);
+            return false;
+        }
+        python = findPython(opt.python, pythonTried);
+        if (plotScript.empty()) {
+            skipped =
+                "tools/bench/plot_accuracy.py was not found (run from the repository root or pass "
+                "--plot-script)";
+        } else if (python.empty()) {
+            if (!opt.python.empty()) {
+                log::error("{}: --python {}: it cannot import matplotlib", kCommand, opt.python);
+                return false;
+            }
+            skipped = fmt::format(
+                "no Python with matplotlib (tried {}); install it with `sudo apt-get install "
+                "python3-matplotlib` (tools/setup.sh does) and plot this CSV later with `/usr/bin/python3 "
+                "tools/bench/plot_accuracy.py {}/accuracy.csv -o {}`",
+                pythonTried, opt.outputDir, opt.outputDir);
+        }
+    }
+    return true;
+}
+
+// Runs the plot script on `csv` in a private folder; the PNGs then go through `outputs` like the
+// CSV. False (logged, with where the CSV was kept) when plotting fails.
+bool drawPlots(const BenchAccuracyOptions& opt, const std::string& csv, const std::string& python,
+               const std::string& plotScript, const std::vector<std::string>& plotMetrics,
+               const std::vector<std::string>& plotNames, OutputFiles& outputs, std::string& error) {
+    std::string tmpl = (fs::temp_directory_path() / "penumbra-accuracy-XXXXXX").string();
+    if (!::mkdtemp(tmpl.data())) {
+        log::error("{}: cannot create a temporary folder for the plots: {}", kCommand, std::strerror(errno));
+        return false;
+    }
+    const fs::path staging = tmpl;
+    {
+        std::ofstream out(staging / "accuracy.csv", std::ios::binary);
+        out << csv;
+    }
+    std::string metricsArg;
+    for (const std::string& m : plotMetrics) metricsArg += (metricsArg.empty() ? "" : ",") + m;
+    const std::string cmd =
+        fmt::format("MPLBACKEND=Agg {} {} {} -o {} --metrics {} >{} 2>&1", shellQuote(python),
+                    shellQuote(plotScript), shellQuote((staging / "accuracy.csv").string()),
+                    shellQuote(staging.string()), metricsArg, shellQuote((staging / "plot.log").string()));
+    fmt::print(stderr, "[{}] plotting with {} {}\n", kCommand, python, plotScript);
+    const int rc = std::system(cmd.c_str());
+    bool ok = rc == 0;
+    for (size_t i = 0; ok && i < plotNames.size(); ++i) {
+        const fs::path png = staging / plotNames[i];
+        ok = outputs.write(
+            opt.outputDir + "/" + plotNames[i],
+            [&](const std::string& tmp, std::string& e) {
+                std::error_code ec;
+                fs::copy_file(png, tmp, fs::copy_options::overwrite_existing, ec);
+                if (ec) e = fmt::format("the plot script did not write {}: {}", png.string(), ec.message());
+                return !ec;
+            },
+            error);
+    }
+    if (!ok) {
+        std::ifstream logFile(staging / "plot.log");
+        const std::string logText((std::istreambuf_iterator<char>(logFile)),
+                                  std::istreambuf_iterator<char>());
+        log::error(
+            "{}: plotting failed{}{}\n{}\nNothing was written to {}; this run's CSV is kept at {} (plot "
+            "it "
+            "with `{} {} {} -o DIR`, or rerun with --no-plots)",
+            kCommand, error.empty() ? "" : ": ", error, logText, opt.outputDir,
+            (staging / "accuracy.csv").string(), python, plotScript, (staging / "accuracy.csv").string());
+        return false;
+    }
+    std::error_code ec;
+    fs::remove_all(staging, ec);
+    return true;
+}
+
 }  // namespace
 
 const std::vector<AccuracyMetricInfo>& accuracyMetrics() {
@@ -824,33 +910,8 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
         }
 
     // Plots: a Python with matplotlib and the script, found before the work.
-    std::string python, plotScript, pythonTried;
-    std::string plotsSkipped;
-    if (opt.noPlots) {
-        plotsSkipped = "--no-plots";
-    } else {
-        plotScript = findPlotScript(opt.plotScript);
-        if (!opt.plotScript.empty() && !fs::is_regular_file(opt.plotScript)) {
-            log::error("{}: --plot-script {}: no such file", kCommand, opt.plotScript);
-            return 1;
-        }
-        python = findPython(opt.python, pythonTried);
-        if (plotScript.empty()) {
-            plotsSkipped =
-                "tools/bench/plot_accuracy.py was not found (run from the repository root or pass "
-                "--plot-script)";
-        } else if (python.empty()) {
-            if (!opt.python.empty()) {
-                log::error("{}: --python {}: it cannot import matplotlib", kCommand, opt.python);
-                return 1;
-            }
-            plotsSkipped = fmt::format(
-                "no Python with matplotlib (tried {}); install it with `sudo apt-get install "
-                "python3-matplotlib` (tools/setup.sh does) and plot this CSV later with `/usr/bin/python3 "
-                "tools/bench/plot_accuracy.py {}/accuracy.csv -o {}`",
-                pythonTried, opt.outputDir, opt.outputDir);
-        }
-    }
+    std::string python, plotScript, plotsSkipped;
+    if (!findPlotter(opt, python, plotScript, plotsSkipped)) return 1;
     const bool plots = plotsSkipped.empty();
     std::vector<std::string> plotMetrics;
     for (const AccuracyMetricInfo& m : accuracyMetrics())
@@ -934,56 +995,7 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
         log::error("{}: {}", kCommand, error);
         return 1;
     }
-    if (plots) {
-        // The script draws into a private folder; the PNGs then go through OutputFiles like the CSV.
-        std::string tmpl = (fs::temp_directory_path() / "penumbra-accuracy-XXXXXX").string();
-        if (!::mkdtemp(tmpl.data())) {
-            log::error("{}: cannot create a temporary folder for the plots: {}", kCommand,
-                       std::strerror(errno));
-            return 1;
-        }
-        const fs::path staging = tmpl;
-        {
-            std::ofstream out(staging / "accuracy.csv", std::ios::binary);
-            out << csv;
-        }
-        std::string metricsArg;
-        for (const std::string& m : plotMetrics) metricsArg += (metricsArg.empty() ? "" : ",") + m;
-        const std::string cmd = fmt::format(
-            "MPLBACKEND=Agg {} {} {} -o {} --metrics {} >{} 2>&1", shellQuote(python), shellQuote(plotScript),
-            shellQuote((staging / "accuracy.csv").string()), shellQuote(staging.string()), metricsArg,
-            shellQuote((staging / "plot.log").string()));
-        fmt::print(stderr, "[{}] plotting with {} {}\n", kCommand, python, plotScript);
-        const int rc = std::system(cmd.c_str());
-        bool ok = rc == 0;
-        for (size_t i = 0; ok && i < plotNames.size(); ++i) {
-            const fs::path png = staging / plotNames[i];
-            ok = outputs.write(
-                opt.outputDir + "/" + plotNames[i],
-                [&](const std::string& tmp, std::string& e) {
-                    std::error_code ec;
-                    fs::copy_file(png, tmp, fs::copy_options::overwrite_existing, ec);
-                    if (ec)
-                        e = fmt::format("the plot script did not write {}: {}", png.string(), ec.message());
-                    return !ec;
-                },
-                error);
-        }
-        if (!ok) {
-            std::ifstream logFile(staging / "plot.log");
-            const std::string logText((std::istreambuf_iterator<char>(logFile)),
-                                      std::istreambuf_iterator<char>());
-            log::error(
-                "{}: plotting failed{}{}\n{}\nNothing was written to {}; this run's CSV is kept at {} (plot "
-                "it "
-                "with `{} {} {} -o DIR`, or rerun with --no-plots)",
-                kCommand, error.empty() ? "" : ": ", error, logText, opt.outputDir,
-                (staging / "accuracy.csv").string(), python, plotScript, (staging / "accuracy.csv").string());
-            return 1;
-        }
-        std::error_code ec;
-        fs::remove_all(staging, ec);
-    }
+    if (plots && !drawPlots(opt, csv, python, plotScript, plotMetrics, plotNames, outputs, error)) return 1;
     if (!outputs.commit(error)) {
         log::error("{}: {}", kCommand, error);
         return 1;
