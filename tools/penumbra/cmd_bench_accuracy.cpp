@@ -404,6 +404,22 @@ bool readAovs(render::SceneRenderer& renderer, uint32_t width, uint32_t height, 
            convertAov(RenderAov::Steps, width, height, &d, &n, &a, steps, error);
 }
 
+// One untimed frame with gbuffer.aux (ids, steps) for the AOVs: the same settings and time as the
+// timed frames.
+bool renderAovFrame(Engine& engine, render::SceneRenderer& renderer, const scene::RenderSettings& settings,
+                    const BenchAccuracyOptions& opt, reference::FloatImage& depth,
+                    reference::FloatImage& normal, reference::FloatImage& ids, reference::FloatImage& steps,
+                    std::string& error) {
+    render::FrameDesc fd;
+    fd.camera = scene::findCamera(engine.world(), settings.camera);
+    fd.settings = settings;
+    fd.width = opt.width;
+    fd.height = opt.height;
+    fd.aux = true;
+    return renderer.render(engine.world(), engine.assets(), fd, error) &&
+           readAovs(renderer, opt.width, opt.height, depth, normal, ids, steps, error);
+}
+
 // One backend over every setting of the sweep. Returns the exit code (0 ok).
 int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend backend, const Reference& ref,
                const std::vector<Setting>& sweep, Rebaker& rebaker, const std::string& scenePath,
@@ -500,16 +516,9 @@ int runBackend(const BenchAccuracyOptions& opt, Engine& engine, rhi::Backend bac
     for (size_t si = 0; si < count; ++si) {
         const Setting& s = sweep[si];
         if (!apply(si)) return 1;
-        // One untimed frame with gbuffer.aux (ids, steps) for the AOVs: the same settings and time.
-        render::FrameDesc fd;
-        fd.camera = scene::findCamera(engine.world(), settings.camera);
-        fd.settings = settings;
-        fd.width = opt.width;
-        fd.height = opt.height;
-        fd.aux = true;
         reference::FloatImage depth, normal, ids, steps;
-        if (!renderer->sceneRenderer().render(engine.world(), engine.assets(), fd, error) ||
-            !readAovs(renderer->sceneRenderer(), opt.width, opt.height, depth, normal, ids, steps, error)) {
+        if (!renderAovFrame(engine, renderer->sceneRenderer(), settings, opt, depth, normal, ids, steps,
+                            error)) {
             log::error("{}: {}: {}={}: AOVs: {}", kCommand, label, s.param, s.value, error);
             return 1;
         }
