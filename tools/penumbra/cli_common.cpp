@@ -178,6 +178,17 @@ CLI::Option* addBenchBackendOption(CLI::App* cmd, std::string& value) {
         ->capture_default_str();
 }
 
+bool benchBackends(const std::string& value, std::vector<rhi::Backend>& out) {
+    if (value == "both") {
+        out = {rhi::Backend::Vulkan, rhi::Backend::OpenGL};
+        return true;
+    }
+    rhi::Backend b;
+    if (!rhi::parseBackend(value, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null) return false;
+    out = {b};
+    return true;
+}
+
 std::string defaultCacheDir() {
     if (const char* env = std::getenv("PENUMBRA_CACHE_DIR"); env && *env) return env;
     if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/penumbra";

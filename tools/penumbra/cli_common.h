@@ -53,6 +53,8 @@ bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths,
 
 // `--backend` of the benchmarks: vulkan (vk), gl (opengl) or both (Vulkan, then OpenGL).
 CLI::Option* addBenchBackendOption(CLI::App* cmd, std::string& value);
+// The backends that value names, in run order (both: Vulkan, then OpenGL); false when it names none.
+bool benchBackends(const std::string& value, std::vector<rhi::Backend>& out);
 
 // The processed-asset cache folder: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else
 // ~/.cache/penumbra (empty when none of them is set).

@@ -472,15 +472,9 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
 int runBenchTrace(const BenchTraceOptions& opt) {
     std::string error;
     std::vector<rhi::Backend> backends;
-    if (opt.backend == "both") {
-        backends = {rhi::Backend::Vulkan, rhi::Backend::OpenGL};
-    } else {
-        rhi::Backend b;
-        if (!rhi::parseBackend(opt.backend, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null) {
-            log::error("bench trace: --backend '{}': use vulkan, gl or both", opt.backend);
-            return 2;
-        }
-        backends = {b};
+    if (!benchBackends(opt.backend, backends)) {
+        log::error("bench trace: --backend '{}': use vulkan, gl or both", opt.backend);
+        return 2;
     }
     if (!checkInputFile(opt.scene, "scene file (.json, .gltf or .glb)", error)) {
         log::error(

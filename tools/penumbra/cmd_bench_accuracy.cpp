@@ -889,15 +889,9 @@ CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
 int runBenchAccuracy(const BenchAccuracyOptions& opt) {
     std::string error;
     std::vector<rhi::Backend> backends;
-    if (opt.backend == "both") {
-        backends = {rhi::Backend::Vulkan, rhi::Backend::OpenGL};
-    } else {
-        rhi::Backend b;
-        if (!rhi::parseBackend(opt.backend, b) || b == rhi::Backend::Auto || b == rhi::Backend::Null) {
-            log::error("{}: --backend '{}': use vulkan, gl or both", kCommand, opt.backend);
-            return 2;
-        }
-        backends = {b};
+    if (!benchBackends(opt.backend, backends)) {
+        log::error("{}: --backend '{}': use vulkan, gl or both", kCommand, opt.backend);
+        return 2;
     }
     if (opt.scenes.empty()) {
         log::error("{}: --scenes: no scene given", kCommand);
