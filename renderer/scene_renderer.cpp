@@ -36,6 +36,7 @@
 #include "renderer/core/gpu_cache.h"
 #include "renderer/core/targets.h"
 #include "renderer/features/debug_view.h"
+#include "renderer/features/effects.h"
 #include "renderer/features/gpu_scene.h"
 #include "renderer/features/lighting.h"
 #include "renderer/features/lighting_reference.h"
@@ -50,7 +51,20 @@ namespace {
 
 constexpr uint32_t kMaxMaterialsPerFrame = 65536;
 
-enum TargetId : uint32_t { kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kAux, kOutput, kTargetCount };
+enum TargetId : uint32_t {
+    kDepth,
+    kNormal,
+    kMaterial,
+    kVelocity,
+    kAlbedo,
+    kAux,
+    kShadow,
+    kAo,
+    kThickness,
+    kReflection,
+    kOutput,
+    kTargetCount
+};
 
 struct TargetInfo {
     const char* name;
@@ -60,6 +74,8 @@ constexpr TargetInfo kTargets[kTargetCount] = {
     {"gbuffer.depth", rhi::Format::R32_FLOAT},      {"gbuffer.normal", rhi::Format::RG16_FLOAT},
     {"gbuffer.material", rhi::Format::RGBA8_UNORM}, {"gbuffer.velocity", rhi::Format::RG16_FLOAT},
     {"gbuffer.albedo", rhi::Format::RGBA8_UNORM},   {"gbuffer.aux", rhi::Format::RG32_FLOAT},
+    {"effects.shadow", rhi::Format::R8_UNORM},      {"effects.ao", rhi::Format::RGBA8_UNORM},
+    {"effects.thickness", rhi::Format::R16_FLOAT},  {"effects.reflection", rhi::Format::RGBA16_FLOAT},
     {"output", rhi::Format::RGBA8_UNORM},
 };
 
@@ -89,6 +105,9 @@ struct SdfSource {
 struct LightSource {
     ecs::Entity entity;
     reference::LightSample sample;
+    bool castShadows = false;
+    float angularRadius = 0.0f;  // directional lights, radians
+    int32_t shadowLayer = -1;    // its layer of effects.shadow (-1: unshadowed this frame)
 };
 
 // The camera of a frame, without scale: forward = -zAxis, right = xAxis, up = yAxis.
@@ -109,6 +128,7 @@ struct FrameGather {
     std::vector<rhi::TextureHandle> materialTexture;  // per material, albedo frames only
     std::vector<LightSource> lights;
     std::vector<SdfSource> sdfs;  // ascending entity index
+    EffectsDesc effects;          // what the effect passes compute this frame
     bool albedo = false;          // some material has a base-colour texture
     bool hardwareSrgb = false;
     bool external = false;
@@ -144,6 +164,7 @@ struct SceneRenderer::Impl {
     std::unordered_set<uint64_t> warnedSdfs;  // SDF entities already warned about (once each)
     SdfSceneData sdfData;                     // read by sdf_upload's execute
     SdfAtlas atlas;                           // the fields of the frame's SdfRenderers
+    uint32_t shadowLayers = 0;                // layers of targets[kShadow]
     uint32_t frameIndex = 0;
 
     // the last frame
@@ -159,6 +180,7 @@ struct SceneRenderer::Impl {
     bool lastGbuffer = false;
     bool lastAlbedo = false;
     bool lastAux = false;
+    bool lastEffect[kTargetCount] = {};  // effect targets written by the last frame
 
     explicit Impl(rhi::Device& d)
         : device(d),
@@ -189,7 +211,8 @@ struct SceneRenderer::Impl {
         // G-buffer targets are also storage images: the SDF trace (compute) reads and writes them.
         const TU usage =
             TU::ColorTarget | TU::Sampled | TU::CopySrc | (id == kOutput ? TU::None : TU::Storage);
-        rhi::TextureDesc d = renderTargetDesc(kTargets[id].format, width, height, kTargets[id].name, usage);
+        const uint32_t w = id == kShadow ? width * std::max(shadowLayers, 1u) : width;
+        rhi::TextureDesc d = renderTargetDesc(kTargets[id].format, w, height, kTargets[id].name, usage);
         t.handle = device.createTexture(d);
         if (!t.handle) {
             error =
@@ -215,6 +238,7 @@ struct SceneRenderer::Impl {
     bool uploadAssets(const assets::AssetManager& assets, FrameGather& g, std::string& error);
     bool prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error);
     bool uploadFields(FrameGather& g, std::string& error);
+    void planEffects(const FrameDesc& desc, FrameGather& g);
     void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
     void fillSdfData(const FrameGather& g);
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
@@ -237,7 +261,7 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
     std::string why;
     if (!s.checkFrame(world, desc, g, why) || !s.setupCamera(world, desc, cam, why) ||
         !s.gather(world, assets, g, why) || !s.uploadAssets(assets, g, why) ||
-        !s.prepareTargets(desc, g, why)) {
+        (s.planEffects(desc, g), !s.prepareTargets(desc, g, why))) {
         error = "scene renderer: " + why;
         return false;
     }
@@ -412,7 +436,8 @@ bool SceneRenderer::Impl::gather(const ecs::World& world, const assets::AssetMan
         return false;
     }
     for (auto [e, light, t] : world.view<ecs::Light, ecs::Transform>())
-        g.lights.push_back({e, reference::makeLightSample(light, t)});
+        g.lights.push_back({e, reference::makeLightSample(light, t), light.castShadows,
+                            light.type == ecs::LightType::Directional ? light.angularRadius : 0.0f});
     std::sort(g.lights.begin(), g.lights.end(),
               [](const LightSource& a, const LightSource& b) { return a.entity.index < b.entity.index; });
     return true;
@@ -481,6 +506,34 @@ bool SceneRenderer::Impl::uploadFields(FrameGather& g, std::string& error) {
     return true;
 }
 
+// Which effects run (renderer/features/effects.h): they trace the frame's SDF objects, so a frame
+// without any runs none; shadows for the lights with castShadows (one layer each, in light order);
+// the thickness and reflection passes only when a material of the frame asks for them. A debug
+// view other than the effects' own needs none.
+void SceneRenderer::Impl::planEffects(const FrameDesc& desc, FrameGather& g) {
+    EffectsDesc& fx = g.effects;
+    fx = resolveEffects(desc.settings);
+    const DebugView view = frameDebugView(desc.debugView, desc.settings);
+    const bool wanted = view == DebugView::None || view == DebugView::Ao || view == DebugView::Shadow ||
+                        view == DebugView::BentNormal || view == DebugView::Thickness;
+    const bool on = wanted && !g.sdfs.empty();
+    // TEMPORARY while the effect modules land (issue 12): an effect whose module is not written yet is off.
+    constexpr bool kShadowModule = false, kAoModule = false, kThicknessModule = false,
+                   kReflectionModule = false;
+    uint32_t layers = 0;
+    for (LightSource& l : g.lights)
+        l.shadowLayer = on && kShadowModule && fx.shadows.enabled && l.castShadows ? int32_t(layers++) : -1;
+    fx.shadowLayers = layers;
+    if (!on || !kAoModule) fx.ao.variant = scene::AoVariant::Off;
+    bool thickness = false, reflection = false;
+    for (const ecs::Material* m : g.materials) {
+        thickness = thickness || m->subsurface > 0.0f;
+        reflection = reflection || (m->reflections && m->roughness <= fx.reflections.roughnessCutoff);
+    }
+    fx.thickness = on && kThicknessModule && thickness;
+    fx.reflection = on && kReflectionModule && reflection;
+}
+
 // GPU copies of the meshes and (albedo frames) textures this frame needs.
 bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, FrameGather& g,
                                        std::string& error) {
@@ -519,12 +572,22 @@ bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGathe
         height = desc.height;
     }
     const bool drawing = !g.sources.empty() || !g.sdfs.empty();
-    for (TargetId id : {kDepth, kNormal, kMaterial, kVelocity, kAlbedo, kAux, kOutput}) {
+    if (g.effects.shadowLayers != shadowLayers) {
+        release(targets[kShadow]);
+        shadowLayers = g.effects.shadowLayers;
+    }
+    const EffectsDesc& fx = g.effects;
+    for (uint32_t i = 0; i < kTargetCount; ++i) {
+        const TargetId id = TargetId(i);
         const bool needed =
             id == kOutput   ? !g.external
             : id == kAlbedo ? drawing && g.albedo
             : id == kAux ? drawing && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings))
-                         : drawing;
+            : id == kShadow     ? drawing && fx.shadowLayers > 0
+            : id == kAo         ? drawing && fx.ao.variant != scene::AoVariant::Off
+            : id == kThickness  ? drawing && fx.thickness
+            : id == kReflection ? drawing && fx.reflection
+                                : drawing;
         if (!needed)
             release(targets[id]);
         else if (!ensureTarget(id, error))
@@ -554,17 +617,28 @@ void SceneRenderer::Impl::fillFrameData(const FrameDesc& desc, const CameraSetup
     fd.scene.background = glm::vec4(desc.settings.background, 1.0f);
     fd.scene.params = {uint32_t(g.lights.size()), uint32_t(desc.settings.shading),
                        uint32_t(desc.settings.toneMapper), g.hardwareSrgb ? 1u : 0u};
-    for (const ecs::Material* m : g.materials)
-        fd.materials.push_back({m->baseColor,
-                                glm::vec4(m->emissive, m->metallic),
-                                {m->roughness, m->baseColorTexture != 0 ? 1.0f : 0.0f, 0.0f, 0.0f}});
+    fd.scene.ambientSky = glm::vec4(desc.settings.ambientSky.value_or(desc.settings.ambient), 0.0f);
+    const EffectsDesc& fx = g.effects;
+    fd.scene.effects = {fx.shadowLayers, fx.ao.variant != scene::AoVariant::Off ? 1u : 0u,
+                        fx.thickness ? 1u : 0u, fx.reflection ? 1u : 0u};
+    for (const ecs::Material* m : g.materials) {
+        const uint32_t flags =
+            (m->reflections && m->roughness <= fx.reflections.roughnessCutoff ? kMaterialReflections : 0u) |
+            (m->normalTexture != 0 ? kMaterialNormalTexture : 0u);
+        fd.materials.push_back(
+            {m->baseColor,
+             glm::vec4(m->emissive, m->metallic),
+             {m->roughness, m->baseColorTexture != 0 ? 1.0f : 0.0f, m->triplanarScale, float(flags)},
+             glm::vec4(m->subsurfaceColor * m->subsurface, m->subsurfaceRadius)});
+    }
     for (const LightSource& l : g.lights) {
         const reference::LightSample& ls = l.sample;
         const float type = ls.type == ecs::LightType::Directional ? 0.0f
                            : ls.type == ecs::LightType::Point     ? 1.0f
                                                                   : 2.0f;
         fd.lights.push_back({glm::vec4(ls.position, type), glm::vec4(ls.direction, ls.range),
-                             glm::vec4(ls.radiance, ls.radius)});
+                             glm::vec4(ls.radiance, ls.radius),
+                             glm::vec4(float(l.shadowLayer), l.angularRadius, 0, 0)});
     }
     if (fd.lights.empty()) fd.lights.push_back(GpuLight{});  // bindable; params.x = 0 lights
     for (size_t i = 0; i < g.sources.size(); ++i) {
@@ -618,10 +692,11 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
             o.boundsMax[a] = bound(std::isfinite(hi[a]) ? hi[a] + margin[a] : HUGE_VAL);
         }
         o.boundsMin.w = s.sigma;
-        o.params = {s.renderer->maxSteps, 0u, 0u, 0u};
+        o.params = {s.renderer->maxSteps, s.renderer->castShadows ? kSdfObjectCastsShadows : 0u, 0u, 0u};
         sd.objects.push_back(o);
         hasField = hasField || s.field;
     }
+    sd.tracedCount = uint32_t(sd.objects.size());
     if (hasField) {
         sd.fields = atlas.fields().data();
         sd.fieldBytes = atlas.fields().size() * sizeof(GpuSdfField);
@@ -717,6 +792,20 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.farPlane = cam.farPlane;
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
         addSdfTrace(fc, trace);
+        if (g.effects.any()) {
+            const EffectsDesc& fx = g.effects;
+            Effects& e = board.add<Effects>();
+            e.shadowLayers = fx.shadowLayers;
+            if (fx.shadowLayers > 0) e.shadow = importTarget(kShadow);
+            if (fx.ao.variant != scene::AoVariant::Off) e.ao = importTarget(kAo);
+            if (fx.thickness) e.thickness = importTarget(kThickness);
+            if (fx.reflection) e.reflection = importTarget(kReflection);
+            EffectsDesc run = fx;
+            run.nearPlane = trace.nearPlane;
+            run.farPlane = trace.farPlane;
+            run.footprint = trace.footprint;
+            addEffects(fc, run);
+        }
     }
     if (view != DebugView::None) {
         const scene::TraceSettings trace = desc.settings.resolvedTrace();
@@ -759,6 +848,11 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     lastGbuffer = !g.sources.empty() || !g.sdfs.empty();
     lastAlbedo = lastGbuffer && g.albedo;
     lastAux = lastGbuffer && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings));
+    const bool fxRan = lastGbuffer && !g.sdfs.empty();
+    lastEffect[kShadow] = fxRan && g.effects.shadowLayers > 0;
+    lastEffect[kAo] = fxRan && g.effects.ao.variant != scene::AoVariant::Off;
+    lastEffect[kThickness] = fxRan && g.effects.thickness;
+    lastEffect[kReflection] = fxRan && g.effects.reflection;
     haveHistory = true;
     historyCamera = desc.camera;
     prevViewProj = cam.viewProj;
@@ -781,8 +875,13 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.drawCalls = uint32_t(g.sources.size());
     st.sdfObjects = uint32_t(g.sdfs.size());
     st.memory.sdfAtlas = atlas.bytes();
-    st.atlas = {atlas.bytes(), atlas.fill(), atlas.residentCount(), atlas.size().x, atlas.size().y,
-                atlas.size().z, atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
+    st.atlas = {atlas.bytes(),
+                atlas.fill(),
+                atlas.residentCount(),
+                atlas.size().x,
+                atlas.size().y,
+                atlas.size().z,
+                atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
     if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
@@ -827,10 +926,11 @@ bool SceneRenderer::readPixels(ImageRGBA8& out, std::string& error) {
 bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
                                std::string& error) {
     Impl& s = *m_impl;
-    for (uint32_t id = 0; id < kAux + 1; ++id) {
+    for (uint32_t id = 0; id < kOutput; ++id) {
         if (name != kTargets[id].name) continue;
-        const bool present =
-            s.haveFrame && s.lastGbuffer && (id != kAlbedo || s.lastAlbedo) && (id != kAux || s.lastAux);
+        const bool effect = id == kShadow || id == kAo || id == kThickness || id == kReflection;
+        const bool present = s.haveFrame && s.lastGbuffer && (id != kAlbedo || s.lastAlbedo) &&
+                             (id != kAux || s.lastAux) && (!effect || s.lastEffect[id]);
         if (!present) {
             error = "scene renderer: readTarget: '" + name + "' was not part of the last frame";
             return false;
@@ -845,7 +945,8 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
     }
     error =
         "scene renderer: readTarget: unknown target '" + name +
-        "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo, gbuffer.aux)";
+        "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo, gbuffer.aux, "
+        "effects.shadow, effects.ao, effects.thickness, effects.reflection)";
     return false;
 }
 

@@ -61,7 +61,8 @@ enum class SdfSource : uint8_t {
     None,      // nothing to draw
     Shapes,    // `sdf` is a shape-program asset (analytic shapes, CSG, repetition; AssetKind::ShapeProgram)
     Field,     // `sdf` is a .psdf field asset (AssetKind::SdfField)
-    MeshBake,  // `bakeMesh` is baked to a field when the scene loads (AssetManager::bakeSdf, cached), at `bakeResolution`
+    MeshBake,  // `bakeMesh` is baked to a field when the scene loads (AssetManager::bakeSdf, cached), at
+               // `bakeResolution`
 };
 
 // An object drawn from a signed distance field, placed by the entity's Transform (translation,
@@ -104,6 +105,15 @@ struct Material {
     AssetId normalTexture = 0;
     AssetId occlusionTexture = 0;
     AssetId emissiveTexture = 0;
+    // SDF objects (renderer/features/effects.h): textures are applied triplanar in object space,
+    // `triplanarScale` repeats per object unit.
+    float triplanarScale = 1.0f;
+    // Subsurface translucency: > 0 makes the thickness pass trace through the object here; the
+    // lighting adds strength * subsurfaceColor * exp(-thickness / subsurfaceRadius) * light.
+    float subsurface = 0.0f;
+    glm::vec3 subsurfaceColor{1.0f};
+    float subsurfaceRadius = 0.1f;  // scene units
+    bool reflections = false;       // one traced, shaded reflection bounce (below the roughness cut-off)
 };
 
 // ---- hierarchy ----------------------------------------------------------------------------------

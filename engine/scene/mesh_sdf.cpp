@@ -13,18 +13,22 @@
 
 namespace penumbra::scene {
 
-bool parseMeshSdfMode(std::string_view text, MeshSdfMode& out) {
-    if (text == "off") {
-        out = MeshSdfMode::Off;
-    } else if (text == "trace") {
-        out = MeshSdfMode::Trace;
-    } else {
-        return false;
-    }
-    return true;
+namespace {
+constexpr const char* kMeshSdfModeNames[] = {"off", "trace", "occlusion", "auto"};
 }
 
-const char* toString(MeshSdfMode mode) { return mode == MeshSdfMode::Trace ? "trace" : "off"; }
+bool parseMeshSdfMode(std::string_view text, MeshSdfMode& out) {
+    for (uint32_t i = 0; i < std::size(kMeshSdfModeNames); ++i)
+        if (text == kMeshSdfModeNames[i]) {
+            out = MeshSdfMode(i);
+            return true;
+        }
+    return false;
+}
+
+const char* toString(MeshSdfMode mode) {
+    return uint32_t(mode) < std::size(kMeshSdfModeNames) ? kMeshSdfModeNames[uint32_t(mode)] : "off";
+}
 
 namespace {
 

@@ -14,12 +14,8 @@
 
 namespace penumbra::scene {
 
-enum class MeshSdfMode : uint8_t {
-    Off,    // meshes are rasterized (nothing changes)
-    Trace,  // every visible mesh becomes an SdfRenderer of its baked field
-};
-
-// "off" / "trace"; false (out unchanged) for anything else.
+// MeshSdfMode is declared in scene.h (the render block's "meshSdf").
+// "off" / "trace" / "occlusion" / "auto"; false (out unchanged) for anything else.
 bool parseMeshSdfMode(std::string_view text, MeshSdfMode& out);
 const char* toString(MeshSdfMode mode);
 

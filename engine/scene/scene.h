@@ -39,9 +39,22 @@ bool parseToneMapper(std::string_view s, ToneMapper& out);
 
 // What a frame shows instead of the lit image (`penumbra render --debug-view`, the render block's
 // "debugView"; renderer/features/debug_view.h describes each view).
-enum class DebugView : uint32_t { None, Normals, Depth, Albedo, Steps, Ids, FieldSlice };
-inline constexpr const char* kDebugViewNames[] = {"none",  "normals", "depth",      "albedo",
-                                                  "steps", "ids",     "field-slice"};
+enum class DebugView : uint32_t {
+    None,
+    Normals,
+    Depth,
+    Albedo,
+    Steps,
+    Ids,
+    FieldSlice,
+    Ao,
+    Shadow,
+    BentNormal,
+    Thickness
+};
+inline constexpr const char* kDebugViewNames[] = {"none",   "normals",    "depth",       "albedo",
+                                                  "steps",  "ids",        "field-slice", "ao",
+                                                  "shadow", "bentnormal", "thickness"};
 inline const char* toString(DebugView view) {
     return kDebugViewNames[uint32_t(view) < std::size(kDebugViewNames) ? uint32_t(view) : 0];
 }
@@ -78,13 +91,67 @@ struct TraceOverrides {
     std::optional<float> hitEpsilon, normalEpsilon, overRelaxation, fieldSafety;
 };
 
+// ---- effects (renderer/features/effects.h) ----------------------------------------------------
+// Soft shadows, cone traced through the scene's SDFs for every light with castShadows.
+struct ShadowSettings {
+    bool enabled = true;           // false: no shadow pass (lights are unshadowed)
+    bool hard = false;             // binary visibility (the light's size is ignored)
+    float resolutionScale = 0.5f;  // of the frame's width and height, in (0, 1]
+    uint32_t maxSteps = 0;         // cone-trace step limit; 0: from the trace quality (docs/FORMATS.md)
+};
+
+// Ambient occlusion variants (renderer/features/sdf_ao.h).
+enum class AoVariant : uint8_t {
+    Off,
+    FiveTap,   // 5 distance taps along the normal (Evans, Quilez)
+    MultiRay,  // 5 taps along each of several Fibonacci directions (mTec); "reference" quality: exact
+               // binary visibility along many rays
+    Cones      // 9 cones with a bent normal (Wright)
+};
+inline constexpr const char* kAoVariantNames[] = {"off", "five-tap", "multi-ray", "cones"};
+inline const char* toString(AoVariant v) {
+    return kAoVariantNames[uint32_t(v) < std::size(kAoVariantNames) ? uint32_t(v) : 0];
+}
+inline bool parseAoVariant(std::string_view text, AoVariant& out) {
+    for (uint32_t i = 0; i < std::size(kAoVariantNames); ++i)
+        if (text == kAoVariantNames[i]) {
+            out = AoVariant(i);
+            return true;
+        }
+    return false;
+}
+
+struct AoSettings {
+    AoVariant variant = AoVariant::Off;
+    float maxDistance = 1.0f;       // occluders farther than this (scene units) do not occlude
+    float strength = 1.0f;          // ao = 1 - strength * occlusion
+    float resolutionScale = 0.25f;  // of the frame's width and height, in (0, 1]
+    uint32_t rays = 0;              // multi-ray directions; 0: from the trace quality
+};
+
+// One traced reflection bounce for materials with "reflections": true.
+struct ReflectionSettings {
+    float roughnessCutoff = 0.5f;  // rougher materials get no traced reflection
+    uint32_t maxSteps = 0;         // 0: from the trace quality
+};
+
+// How rasterized meshes take part in the SDF passes (`--mesh-sdf`, the render block's "meshSdf").
+enum class MeshSdfMode : uint8_t {
+    Off,        // meshes are only rasterized: they receive SDF shadows and AO but cast none
+    Trace,      // every visible mesh becomes an SdfRenderer of its baked field (comparisons)
+    Occlusion,  // meshes stay rasterized and get a baked field used only for shadows and AO
+    Auto        // Occlusion when the frame has effects (shadowed lights or AO) and meshes, else Off
+};
+
 struct RenderSettings {
     uint32_t width = 640;
     uint32_t height = 360;
     ShadingModel shading = ShadingModel::CookTorrance;
     ToneMapper toneMapper = ToneMapper::Aces;
     float exposure = 1.0f;                        // multiplies linear radiance before tone mapping
-    glm::vec3 ambient{0.03f};                     // constant ambient radiance (linear RGB)
+    glm::vec3 ambient{0.03f};                     // ambient radiance (linear RGB); from below with a sky
+    std::optional<glm::vec3> ambientSky;          // ambient from straight up (hemisphere ambient: the
+                                                  // lighting blends by the normal's y); unset: constant
     glm::vec3 background{0.0f};                   // linear RGB where nothing is hit
     std::string camera;                           // camera entity name; empty = the first camera
     double fixedDt = 1.0 / 60.0;                  // update step of the app loop (seconds)
@@ -92,6 +159,10 @@ struct RenderSettings {
     TraceOverrides trace;                         // the scene's per-setting overrides
     DebugView debugView = DebugView::None;        // --debug-view replaces it
     glm::vec4 slice{0.0f, 1.0f, 0.0f, 0.0f};      // field-slice plane dot(xyz, p) = w, xyz unit
+    ShadowSettings shadows;
+    AoSettings ao;
+    ReflectionSettings reflections;
+    MeshSdfMode meshSdf = MeshSdfMode::Auto;  // --mesh-sdf replaces it
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };

@@ -26,6 +26,7 @@
 #include "engine/assets/primitives.h"
 #include "engine/core/json_depth.h"
 #include "engine/core/log.h"
+#include "engine/scene/mesh_sdf.h"
 #include "engine/scene/scene.h"
 #include "engine/sdf/shape_program.h"
 
@@ -421,6 +422,9 @@ private:
     // ---- sections ------------------------------------------------------------------------------
     bool parseVersion(const json& root);
     bool parseRender(const json& v, const std::string& ptr);
+    bool parseShadows(const json& v, const std::string& ptr, ShadowSettings& out);
+    bool parseAo(const json& v, const std::string& ptr, AoSettings& out);
+    bool parseReflections(const json& v, const std::string& ptr, ReflectionSettings& out);
     bool parseTraceOverrides(const json& v, const std::string& ptr, TraceOverrides& out);
     bool parseMaterials(const json& v, const std::string& ptr);
     bool parseMaterial(const json& v, const std::string& ptr, ecs::Material& out);
@@ -531,11 +535,11 @@ bool SceneParser::parseVersion(const json& root) {
 }
 
 bool SceneParser::parseRender(const json& v, const std::string& ptr) {
-    if (!object(v, ptr) ||
-        !checkKeys(v, ptr,
-                   {"width", "height", "shading", "toneMapper", "exposure", "ambient", "background", "camera",
-                    "fixedDt", "quality", "trace", "debugView", "slice"},
-                   "render settings")) {
+    if (!object(v, ptr) || !checkKeys(v, ptr,
+                                      {"width", "height", "shading", "toneMapper", "exposure", "ambient",
+                                       "ambientSky", "background", "camera", "fixedDt", "quality", "trace",
+                                       "debugView", "slice", "shadows", "ao", "reflections", "meshSdf"},
+                                      "render settings")) {
         return false;
     }
     RenderSettings& s = m_scene.settings;
@@ -566,6 +570,10 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!number(value, p, s.exposure) || !positive(p, s.exposure, "exposure")) return false;
         } else if (key == "ambient") {
             if (!color(value, p, s.ambient)) return false;
+        } else if (key == "ambientSky") {
+            glm::vec3 sky(0.0f);
+            if (!color(value, p, sky)) return false;
+            s.ambientSky = sky;
         } else if (key == "background") {
             if (!color(value, p, s.background)) return false;
         } else if (key == "camera") {
@@ -589,8 +597,22 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!string(value, p, name)) return false;
             if (!parseDebugView(name, s.debugView)) {
                 return fail(p, fmt::format("unknown debug view '{}' (expected none, normals, depth, albedo, "
-                                           "steps, ids or field-slice)",
+                                           "steps, ids, field-slice, ao, shadow, bentnormal or thickness)",
                                            name));
+            }
+        } else if (key == "shadows") {
+            if (!parseShadows(value, p, s.shadows)) return false;
+        } else if (key == "ao") {
+            if (!parseAo(value, p, s.ao)) return false;
+        } else if (key == "reflections") {
+            if (!parseReflections(value, p, s.reflections)) return false;
+        } else if (key == "meshSdf") {
+            std::string name;
+            if (!string(value, p, name)) return false;
+            if (!parseMeshSdfMode(name, s.meshSdf)) {
+                return fail(
+                    p,
+                    fmt::format("unknown meshSdf mode '{}' (expected off, trace, occlusion or auto)", name));
             }
         } else if (key == "slice") {
             // The field-slice plane: {"normal": [x, y, z], "offset": d} is dot(normal / |normal|, p) = d.
@@ -604,6 +626,78 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (auto o = value.find("offset"); o != value.end() && !number(*o, child(p, "offset"), offset))
                 return false;
             s.slice = glm::vec4(glm::normalize(n), offset);
+        }
+    }
+    return true;
+}
+
+// The render block's "shadows" object (docs/FORMATS.md).
+bool SceneParser::parseShadows(const json& v, const std::string& ptr, ShadowSettings& out) {
+    if (!object(v, ptr) ||
+        !checkKeys(v, ptr, {"enabled", "hard", "resolutionScale", "maxSteps"}, "shadow settings"))
+        return false;
+    for (const auto& item : v.items()) {
+        const std::string& key = item.key();
+        const std::string p = child(ptr, key);
+        if (key == "enabled" || key == "hard") {
+            if (!boolean(item.value(), p, key == "enabled" ? out.enabled : out.hard)) return false;
+        } else if (key == "resolutionScale") {
+            if (!number(item.value(), p, out.resolutionScale) ||
+                !inRange(p, out.resolutionScale, 0.0f, 1.0f, true, false))
+                return false;
+        } else if (!count(item.value(), p, 1, kMaxSdfSteps, out.maxSteps)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The render block's "ao" object (docs/FORMATS.md).
+bool SceneParser::parseAo(const json& v, const std::string& ptr, AoSettings& out) {
+    if (!object(v, ptr) ||
+        !checkKeys(v, ptr, {"variant", "maxDistance", "strength", "resolutionScale", "rays"},
+                   "ambient occlusion settings"))
+        return false;
+    for (const auto& item : v.items()) {
+        const std::string& key = item.key();
+        const std::string p = child(ptr, key);
+        if (key == "variant") {
+            std::string name;
+            if (!string(item.value(), p, name)) return false;
+            if (!parseAoVariant(name, out.variant))
+                return fail(
+                    p, fmt::format("unknown AO variant '{}' (expected off, five-tap, multi-ray or cones)",
+                                   name));
+        } else if (key == "maxDistance") {
+            if (!number(item.value(), p, out.maxDistance) ||
+                !inRange(p, out.maxDistance, 0.0f, 1e6f, true, false))
+                return false;
+        } else if (key == "strength") {
+            if (!number(item.value(), p, out.strength) || !inRange(p, out.strength, 0.0f, 1.0f, false, false))
+                return false;
+        } else if (key == "resolutionScale") {
+            if (!number(item.value(), p, out.resolutionScale) ||
+                !inRange(p, out.resolutionScale, 0.0f, 1.0f, true, false))
+                return false;
+        } else if (!count(item.value(), p, 1, 4096, out.rays)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The render block's "reflections" object (docs/FORMATS.md).
+bool SceneParser::parseReflections(const json& v, const std::string& ptr, ReflectionSettings& out) {
+    if (!object(v, ptr) || !checkKeys(v, ptr, {"roughnessCutoff", "maxSteps"}, "reflection settings"))
+        return false;
+    for (const auto& item : v.items()) {
+        const std::string p = child(ptr, item.key());
+        if (item.key() == "roughnessCutoff") {
+            if (!number(item.value(), p, out.roughnessCutoff) ||
+                !inRange(p, out.roughnessCutoff, 0.0f, 1.0f, false, false))
+                return false;
+        } else if (!count(item.value(), p, 1, kMaxSdfSteps, out.maxSteps)) {
+            return false;
         }
     }
     return true;
@@ -676,7 +770,8 @@ bool SceneParser::parseMaterial(const json& v, const std::string& ptr, ecs::Mate
     if (!object(v, ptr) ||
         !checkKeys(v, ptr,
                    {"baseColor", "metallic", "roughness", "emissive", "baseColorTexture",
-                    "metallicRoughnessTexture", "normalTexture", "occlusionTexture", "emissiveTexture"},
+                    "metallicRoughnessTexture", "normalTexture", "occlusionTexture", "emissiveTexture",
+                    "triplanarScale", "subsurface", "subsurfaceColor", "subsurfaceRadius", "reflections"},
                    "a material")) {
         return false;
     }
@@ -715,6 +810,20 @@ bool SceneParser::parseMaterial(const json& v, const std::string& ptr, ecs::Mate
             if (!loadTexture(value, p, false, m.occlusionTexture)) return false;
         } else if (key == "emissiveTexture") {
             if (!loadTexture(value, p, true, m.emissiveTexture)) return false;
+        } else if (key == "triplanarScale") {
+            if (!number(value, p, m.triplanarScale) || !inRange(p, m.triplanarScale, 0.0f, 1e6f, true, false))
+                return false;
+        } else if (key == "subsurface") {
+            if (!number(value, p, m.subsurface) || !inRange(p, m.subsurface, 0.0f, 1.0f, false, false))
+                return false;
+        } else if (key == "subsurfaceColor") {
+            if (!color(value, p, m.subsurfaceColor)) return false;
+        } else if (key == "subsurfaceRadius") {
+            if (!number(value, p, m.subsurfaceRadius) ||
+                !inRange(p, m.subsurfaceRadius, 0.0f, 1e6f, true, false))
+                return false;
+        } else if (key == "reflections") {
+            if (!boolean(value, p, m.reflections)) return false;
         }
     }
     return true;

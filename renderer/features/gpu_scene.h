@@ -17,25 +17,32 @@ namespace penumbra::render {
 using GpuView = shaders::View;  // set 0, binding 0 of every program
 
 struct GpuScene {
-    glm::vec4 ambient;     // rgb ambient, w exposure
+    glm::vec4 ambient;     // rgb ambient (the ground's with a sky ambient), w exposure
     glm::vec4 background;  // rgb background radiance
     glm::uvec4 params;     // x light count, y shading model, z tone mapper, w 1 = sRGB target
+    glm::vec4 ambientSky;  // rgb ambient from straight up (= ambient when the scene sets no sky)
+    glm::uvec4 effects;    // x shadow layers, y 1 = AO target, z 1 = thickness, w 1 = reflections
 };
-static_assert(sizeof(GpuScene) == 48);
+static_assert(sizeof(GpuScene) == 80);
 
 struct GpuMaterial {
     glm::vec4 baseColor;
     glm::vec4 emissiveMetal;  // rgb emissive, w metallic
-    glm::vec4 params;         // x roughness, y 1 when textured
+    glm::vec4 params;         // x roughness, y 1 when textured, z triplanar scale, w flags (kMaterial*)
+    glm::vec4 subsurface;     // rgb subsurface colour * strength (0: none), w radius (scene units)
 };
-static_assert(sizeof(GpuMaterial) == 48);
+static_assert(sizeof(GpuMaterial) == 64);
+// GpuMaterial::params.w bits (stored as a float holding a small integer).
+inline constexpr uint32_t kMaterialReflections = 1u;    // traced reflection bounce
+inline constexpr uint32_t kMaterialNormalTexture = 2u;  // has a normal map
 
 struct GpuLight {
     glm::vec4 positionType;    // xyz position, w 0 directional / 1 point / 2 sphere
     glm::vec4 directionRange;  // xyz direction the light travels, w range
     glm::vec4 radianceRadius;  // rgb colour * intensity, w radius
+    glm::vec4 shadow;          // x shadow layer (-1: unshadowed), y angular radius (directional, radians)
 };
-static_assert(sizeof(GpuLight) == 48);
+static_assert(sizeof(GpuLight) == 64);
 
 struct GpuObject {
     glm::mat4 model;

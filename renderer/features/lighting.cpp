@@ -2,6 +2,7 @@
 
 #include <shaders/deferred_lighting.h>
 
+#include "renderer/features/effects.h"
 #include "renderer/features/fullscreen.h"
 
 namespace penumbra::render {
@@ -12,9 +13,13 @@ void addLighting(FrameContext& fc) {
         SceneBuffers scene;
         GBuffer gb;
         fg::TextureRef output;
+        Effects fx;  // absent targets: gbuffer.depth is bound instead (scene.effects says they are off)
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
-    const auto variant = gbuffer.albedo.isValid() ? program::Variant::Albedo : program::Variant::Default;
+    const bool effects = fc.board.has<Effects>();
+    using V = program::Variant;
+    const V variant = gbuffer.albedo.isValid() ? (effects ? V::AlbedoEffects : V::Albedo)
+                                               : (effects ? V::Effects : V::Default);
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     fc.graph.addPass<Data>(
@@ -28,8 +33,17 @@ void addLighting(FrameContext& fc) {
             b.read(d.scene.materials, rhi::Access::ShaderRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
             readGBuffer(b, d.gb);
+            if (effects) {
+                d.fx = *fc.board.find<Effects>();
+                for (fg::TextureRef* t : {&d.fx.shadow, &d.fx.ao, &d.fx.thickness, &d.fx.reflection}) {
+                    if (t->isValid())
+                        b.read(*t, rhi::Access::ShaderSampled);
+                    else
+                        *t = d.gb.depth;
+                }
+            }
         },
-        [&cache = fc.cache, prog](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, prog, effects](const Data& d, fg::PassContext& ctx) {
             beginFullscreen(ctx, d.output, prog.pipeline, "lighting");
             ShaderParams params(*prog.vertex, *prog.fragment);
             params.set("View", ctx.buffer(d.scene.view))
@@ -37,6 +51,11 @@ void addLighting(FrameContext& fc) {
                 .set("Materials", ctx.buffer(d.scene.materials))
                 .set("Lights", ctx.buffer(d.scene.lights));
             setGBuffer(params, ctx, d.gb, prog.nearest);
+            if (effects)
+                params.set("effectsShadow", ctx.texture(d.fx.shadow), prog.nearest)
+                    .set("effectsAo", ctx.texture(d.fx.ao), prog.nearest)
+                    .set("effectsThickness", ctx.texture(d.fx.thickness), prog.nearest)
+                    .set("effectsReflection", ctx.texture(d.fx.reflection), prog.nearest);
             drawFullscreen(ctx, params, cache, prog.pipeline);
         });
 }

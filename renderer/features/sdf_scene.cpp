@@ -80,6 +80,7 @@ void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
                 d.atlas = atlasRef;
             }
             d.objectCount = uint32_t(data.objects.size());
+            d.tracedCount = std::min(data.tracedCount, d.objectCount);
             out = d;
         },
         [&data](const SdfSceneBuffers& d, fg::PassContext& ctx) {

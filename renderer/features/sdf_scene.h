@@ -31,8 +31,9 @@ struct GpuSdfObject {
     glm::vec4 boundsMin;  // xyz local bounds (+-1e30 when unbounded), w sigma_min of model
     glm::vec4 boundsMax;
     glm::uvec4 info;    // x kind, y first record / atlas slot, z material index, w entity index
-    glm::uvec4 params;  // x step limit (0: the pass setting)
+    glm::uvec4 params;  // x step limit (0: the pass setting), y flags (kSdfObject*)
 };
+inline constexpr uint32_t kSdfObjectCastsShadows = 1u;  // params.y: takes part in shadows and AO
 static_assert(sizeof(GpuSdfObject) == 256);
 
 // Largest magnitude stored for unbounded bounds (the shaders' slab test stays finite).
@@ -40,7 +41,8 @@ inline constexpr float kSdfUnbounded = 1.0e30f;
 
 // This frame's SDF data; `atlas` and `fields` only when a field object is in the frame.
 struct SdfSceneData {
-    std::vector<GpuSdfObject> objects;
+    std::vector<GpuSdfObject> objects;  // traced objects first, then occluders
+    uint32_t tracedCount = 0;
     std::vector<sdf::ShapeInstruction> records;  // every program used, each header + instructions
     const void* fields = nullptr;                // GpuSdfField[fieldCount] (the atlas' slot table)
     uint64_t fieldBytes = 0;
@@ -49,12 +51,14 @@ struct SdfSceneData {
 };
 
 struct SdfSceneBuffers {
-    fg::BufferRef objects;  // GpuSdfObject[]
-    fg::BufferRef records;  // sdf::ShapeInstruction[] (>= 1 record)
-    fg::BufferRef fields;   // GpuSdfField[] (field frames only)
-    fg::TextureRef atlas;   // R16F 3D atlas (field frames only)
-    uint32_t objectCount = 0;
-    uint64_t bytes = 0;  // buffer bytes
+    fg::BufferRef objects;     // GpuSdfObject[]
+    fg::BufferRef records;     // sdf::ShapeInstruction[] (>= 1 record)
+    fg::BufferRef fields;      // GpuSdfField[] (field frames only)
+    fg::TextureRef atlas;      // R16F 3D atlas (field frames only)
+    uint32_t objectCount = 0;  // every object: the effects (shadows, AO, ...) see them all
+    uint32_t tracedCount = 0;  // objects [0, tracedCount) are drawn by the trace; the rest are
+                               // occluders only (mesh occlusion fields, --mesh-sdf occlusion)
+    uint64_t bytes = 0;        // buffer bytes
 };
 
 // The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi

@@ -30,7 +30,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const rhi::SamplerHandle sampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
     const scene::TraceSettings& s = desc.settings;
     const program::PushConstants push{
-        glm::uvec4(sdfScene.objectCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
+        glm::uvec4(sdfScene.tracedCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
         glm::vec4(s.hitEpsilon, s.normalEpsilon, s.overRelaxation, s.fieldSafety),
         glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f)};
     const uint32_t width = fc.width, height = fc.height;

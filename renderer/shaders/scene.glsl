@@ -11,13 +11,20 @@
 struct Material {
     vec4 baseColor;      // linear rgb, a alpha (unused)
     vec4 emissiveMetal;  // rgb emissive radiance, w metallic
-    vec4 params;         // x roughness, y 1 when the material has a base-colour texture
+    vec4 params;         // x roughness, y 1 when the material has a base-colour texture,
+                         // z triplanar scale (SDF objects), w flags (MATERIAL_*)
+    vec4 subsurface;     // rgb subsurface colour * strength (0: none), w radius (scene units)
 };
+const uint MATERIAL_REFLECTIONS = 1u;    // traced reflection bounce
+const uint MATERIAL_NORMAL_TEXTURE = 2u;  // has a normal map
+uint materialFlags(Material m) { return uint(m.params.w + 0.5); }
 
 struct Light {
     vec4 positionType;    // xyz world position, w type (0 directional, 1 point, 2 sphere)
     vec4 directionRange;  // xyz unit direction the light travels (directional), w range (<= 0: none)
     vec4 radianceRadius;  // rgb colour * intensity, w emitter radius (sphere lights)
+    vec4 shadow;          // x shadow layer in the effects.shadow strip (-1: unshadowed),
+                          // y angular radius in radians (directional lights)
 };
 
 struct Object {
@@ -31,9 +38,11 @@ struct Object {
 // binding is part of the program's reflection and must be bound, used or not).
 #define SCENE_CONSTANTS                                                                         \
     layout(set = 1, binding = 0, std140) uniform Scene {                                        \
-        vec4 ambient;    /* rgb ambient radiance, w exposure */                                 \
+        vec4 ambient;    /* rgb ambient radiance (from below with a sky), w exposure */         \
         vec4 background; /* rgb background radiance */                                         \
         uvec4 params;    /* x lights, y shading model, z tone mapper, w 1 = target encodes sRGB */ \
+        vec4 ambientSky; /* rgb ambient radiance from straight up */                            \
+        uvec4 effects;   /* x shadow layers, y AO target, z thickness, w reflections (1 = on) */ \
     }                                                                                           \
     scene
 #define SCENE_OBJECTS layout(set = 1, binding = 1, std430) readonly buffer Objects { Object objects[]; }

@@ -180,6 +180,14 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "SDF trace quality preset: low | medium | high | reference (replaces the scene's "
                     "render.quality; the scene's render.trace overrides still apply; docs/FORMATS.md)")
         ->check(CLI::IsMember({"low", "medium", "high", "reference"}));
+    cmd->add_option("--shadows", opt.shadows,
+                    "Soft shadows of lights with castShadows: on (cone traced, penumbra from the light's "
+                    "size) | hard (binary) | off (replaces the scene's render.shadows.enabled / hard)")
+        ->check(CLI::IsMember({"on", "off", "hard"}));
+    cmd->add_option("--ao", opt.ao,
+                    "Ambient occlusion variant: off | five-tap | multi-ray | cones (bent normal) (replaces "
+                    "the scene's render.ao.variant; docs/FORMATS.md)")
+        ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
     return cmd;
 }
 
@@ -240,6 +248,11 @@ int runRender(const RenderOptions& opt) {
     if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
     if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
     if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
+    if (!opt.shadows.empty()) {
+        settings.shadows.enabled = opt.shadows != "off";
+        settings.shadows.hard = opt.shadows == "hard";
+    }
+    if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
     if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
     if (!opt.slice.empty()) settings.slice = slice;
     if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {

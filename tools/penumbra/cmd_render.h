@@ -31,6 +31,8 @@ struct RenderOptions {
     std::string shading;          // override: cook-torrance | blinn-phong
     std::string toneMapper;       // override: clamp | reinhard | aces
     std::string quality;          // override: low | medium | high | reference (SDF trace preset)
+    std::string shadows;          // override: on | off | hard (render.shadows)
+    std::string ao;               // override: off | five-tap | multi-ray | cones (render.ao.variant)
     std::string debugView;        // empty: the scene's | none | normals | depth | albedo | steps |
                                   // ids | field-slice
     std::string slice;            // --slice AXIS=OFFSET | NX,NY,NZ,OFFSET; empty: the scene's
