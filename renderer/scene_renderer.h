@@ -6,8 +6,11 @@
 //   sdf_upload     (transfer)  the frame's SDF objects and shape-program records
 //   sdf_trace      (compute)   sphere tracing of the SdfRenderer entities into the same G-buffer,
 //                              bounded by the mesh depth (hybrid)
+//   effects        (compute)   sdf_shadow, sdf_ao, sdf_thickness, sdf_reflection, effects_upsample
+//                              (renderer/features/effects.h: each only when the frame needs it)
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
-//                              directional + point lights, ambient) + exposure + tone mapping,
+//                              directional, point and sphere lights with their shadows, hemisphere
+//                              ambient x AO, translucency, reflections) + exposure + tone mapping,
 //                              written sRGB-encoded into the RGBA8 output
 //   debug_view     (raster)    instead of lighting when a debug view is set (FrameDesc::debugView,
 //                              else the scene's render.debugView): one G-buffer channel (normals,
