@@ -1,8 +1,121 @@
+// The "sdf_shadow" pass (renderer/features/sdf_shadow.h): sizes the output, picks the variant and
+// fills the push constants; the cone trace lives in renderer/shaders/sdf_shadow.comp and
+// sdf_cone.glsl.
 #include "renderer/features/sdf_shadow.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <shaders/sdf_shadow.h>
+
+#include "renderer/core/shader_params.h"
+#include "renderer/core/targets.h"
+#include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
 
-// Placeholder until the module lands (adds no pass).
-void addSdfShadow(FrameContext&, const EffectsDesc&) {}
+namespace {
+
+namespace program = shaders::sdf_shadow;
+
+struct ShadowSize {
+    uint32_t width = 0, height = 0;  // one layer
+    bool full = true;                // writes Effects::shadow directly
+};
+
+ShadowSize shadowSize(const FrameContext& fc, float resolutionScale) {
+    const float scale = std::clamp(resolutionScale, 0.0f, 1.0f);
+    if (scale >= 1.0f) return {fc.width, fc.height, true};
+    return {std::max(1u, uint32_t(std::lround(float(fc.width) * scale))),
+            std::max(1u, uint32_t(std::lround(float(fc.height) * scale))), false};
+}
+
+rhi::SamplerHandle nearestSampler(GpuCache& cache) {
+    rhi::SamplerDesc d;
+    d.minFilter = d.magFilter = rhi::Filter::Nearest;
+    d.debugName = "sdf_shadow.gbuffer";
+    return cache.sampler(d);
+}
+
+}  // namespace
+
+void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        fg::TextureRef depth, normal, out;
+    };
+    const GBuffer& gbuffer = *fc.board.find<GBuffer>();
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const bool fields = sdfScene.atlas.isValid();
+    const rhi::ShaderDesc& cs =
+        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    rhi::SamplerDesc linear;  // trilinear field sampling, as the trace
+    linear.debugName = "sdf.atlas";
+    const rhi::SamplerHandle atlasSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const rhi::SamplerHandle nearest = nearestSampler(fc.cache);
+    const ShadowSize size = shadowSize(fc, desc.shadows.resolutionScale);
+    const uint32_t layers = desc.shadowLayers;
+    const program::PushConstants push{
+        glm::uvec4(sdfScene.objectCount, desc.shadows.maxSteps, layers, desc.shadows.hard ? 1u : 0u),
+        glm::uvec4(size.width, size.height, fc.width, fc.height),
+        glm::vec4(desc.trace.fieldSafety, desc.footprint, desc.farPlane, 0.0f)};
+
+    fg::TextureRef lowRes;
+    fc.graph.addPass<Data>(
+        "sdf_shadow", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
+            d.normal = b.read(gbuffer.normal, rhi::Access::ShaderSampled);
+            if (size.full) {
+                d.out = fc.board.find<Effects>()->shadow;
+            } else {
+                using TU = rhi::TextureUsage;
+                lowRes = d.out =
+                    b.createTexture("sdf_shadow.low",
+                                    renderTargetDesc(rhi::Format::R8_UNORM, size.width * layers, size.height,
+                                                     "sdf_shadow.low", TU::Storage | TU::Sampled));
+            }
+            b.write(d.out, rhi::Access::ShaderWrite);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            b.read(d.scene.scene, rhi::Access::UniformRead);
+            b.read(d.scene.lights, rhi::Access::ShaderRead);
+            b.read(d.sdf.objects, rhi::Access::ShaderRead);
+            b.read(d.sdf.records, rhi::Access::ShaderRead);
+            if (fields) {
+                b.read(d.sdf.fields, rhi::Access::ShaderRead);
+                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
+            }
+        },
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers, fields](
+            const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("Scene", ctx.buffer(d.scene.scene))
+                .set("Lights", ctx.buffer(d.scene.lights))
+                .set("SdfObjects", ctx.buffer(d.sdf.objects))
+                .set("ShapeRecords", ctx.buffer(d.sdf.records))
+                .set("gbufferDepth", ctx.texture(d.depth), nearest)
+                .set("gbufferNormal", ctx.texture(d.normal), nearest)
+                .setStorage("shadowImage", ctx.texture(d.out));
+            if (fields)
+                params.set("SdfFields", ctx.buffer(d.sdf.fields))
+                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), atlasSampler);
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            dispatchOver(ctx.cmd, cs, size.width, size.height, layers);
+        });
+    if (!size.full) {
+        EffectsLowRes copy = *fc.board.find<EffectsLowRes>();
+        copy.shadow = lowRes;
+        copy.shadowWidth = size.width;
+        copy.shadowHeight = size.height;
+        fc.board.add(copy);
+    }
+}
 
 }  // namespace penumbra::render

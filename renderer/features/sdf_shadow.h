@@ -1,11 +1,28 @@
-// Feature "sdf_shadow": cone-traced soft shadows (renderer/features/effects.h orders the effects). NOT YET
-// IMPLEMENTED.
+// Feature "sdf_shadow": the compute pass "sdf_shadow", cone-traced soft shadows through the frame's
+// SDF objects (renderer/features/effects.h orders the effects; renderer/shaders/sdf_shadow.comp is
+// the pass, renderer/shaders/sdf_cone.glsl the visibility estimate shared with sdf_reflection).
+//
+// One layer per shadowed light (GpuLight::shadow.x; lights with castShadows false get none and cost
+// nothing), dispatched over (lowW, lowH, layers) with lowW = max(1, round(W * resolutionScale)):
+//   - directional lights: the cone's half-angle is the light's angular radius;
+//   - sphere lights: asin(radius / distance), the sphere's angular radius, up to the sphere;
+//   - point lights and ShadowSettings::hard: binary visibility;
+// over every SDF object that casts shadows (kSdfObjectCastsShadows: occluder-only mesh fields
+// included), with the step limit ShadowSettings::maxSteps (by quality when 0) and the trace's field
+// safety. The penumbra comes only from the light's size: the visible fraction of the light's disc
+// cut by the nearest occluder edge along the cone (sdf_cone.glsl documents the estimate and its
+// bias).
+//
+// Output: resolutionScale 1 writes Effects::shadow directly; below 1 a transient R8_UNORM strip
+// (lowW * layers) x lowH published as EffectsLowRes::shadow for effects_upsample.
 #pragma once
 
 #include "renderer/features/effects.h"
 
 namespace penumbra::render {
 
+// Adds the pass for desc.shadowLayers > 0. Reads SceneBuffers (view, scene constants, lights),
+// SdfSceneBuffers, GBuffer depth and normal; writes Effects::shadow or a low-resolution transient.
 void addSdfShadow(FrameContext& fc, const EffectsDesc& desc);
 
 }  // namespace penumbra::render

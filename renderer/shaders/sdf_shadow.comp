@@ -1,0 +1,100 @@
+// sdf_shadow: cone-traced soft shadows, one layer per shadowed light (renderer/features/sdf_shadow.h
+// documents the pass, renderer/shaders/sdf_cone.glsl the visibility estimate). One invocation per
+// (low-resolution pixel, layer):
+//  1. the full-resolution pixel the low-resolution one stands for (effects.glsl effectsFullPixel);
+//     background (depth 0) writes 1;
+//  2. the light whose shadow.x is this layer: directional lights toward -direction up to the far
+//     plane with the cone half-angle = the sun's angular radius; point lights hard; sphere lights up
+//     to the sphere (distance - radius) with half-angle asin(radius / distance), the exact angular
+//     radius of a sphere (atan(r / d) is the half-angle of the disc of radius r, slightly wider
+//     than the sphere's silhouette); the hard setting forces a binary ray. Outside a light's range
+//     the light adds nothing: 1 without a trace. A light entirely below the surface's horizon
+//     (n . l < -sin(halfAngle)) is hidden: 0 without a trace;
+//  3. the cone trace from the surface point lifted off it by sdfSurfaceBias along the normal (2
+//     pixel footprints at the point's depth, at least 1.5 voxels of the nearest field), starting
+//     another bias along the light direction; hard rays stop at a distance below half a pixel
+//     footprint;
+//  4. the visible fraction into the layer's column block of the R8 strip.
+#version 450
+#pragma penumbra_variants SDF_FIELDS
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "scene.glsl"
+#include "gbuffer.glsl"
+#include "effects.glsl"
+
+SCENE_CONSTANTS;
+SCENE_LIGHTS;
+
+#define SDF_SCENE_SET 2
+#define SDF_OBJECTS_BINDING 3
+#define SHAPE_RECORDS_BINDING 4
+#define SDF_FIELDS_BINDING 5
+#define SDF_ATLAS_BINDING 6
+#include "sdf_scene.glsl"
+#include "sdf_cone.glsl"
+
+layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
+layout(set = 2, binding = 1) uniform sampler2D gbufferNormal;
+layout(set = 2, binding = 2, r8) uniform writeonly image2D shadowImage;
+
+layout(push_constant) uniform SdfShadow {
+    uvec4 counts;  // x SDF objects (all, occluder-only included), y step limit, z layers, w flags (1 hard)
+    uvec4 size;    // x, y the output's size of one layer, z, w the full-resolution frame size
+    vec4 params;   // x field safety, y pixel footprint per unit of distance, z far plane
+} shadow;
+
+const uint kHardFlag = 1u;
+
+// The index of the light drawn into `layer` (-1 when none is).
+int layerLight(uint layer) {
+    for (uint i = 0u; i < scene.params.x; ++i)
+        if (int(lights[i].shadow.x) == int(layer)) return int(i);
+    return -1;
+}
+
+float visibility(Light light, vec3 p, vec3 n, float pixelSize) {
+    vec3 l;
+    float tMax, sinHalf;
+    if (light.positionType.w < 0.5) {
+        l = -light.directionRange.xyz;
+        tMax = shadow.params.z;
+        sinHalf = sin(light.shadow.y);
+    } else {
+        vec3 toLight = light.positionType.xyz - p;
+        float dist = length(toLight);
+        if (light.directionRange.w > 0.0 && dist >= light.directionRange.w) return 1.0;  // adds nothing
+        if (dist <= 0.0) return 1.0;
+        l = toLight / dist;
+        bool sphere = light.positionType.w > 1.5;
+        float radius = sphere ? min(light.radianceRadius.w, dist) : 0.0;
+        tMax = dist - radius;
+        sinHalf = radius / dist;
+    }
+    if ((shadow.counts.w & kHardFlag) != 0u) sinHalf = 0.0;
+    if (dot(n, l) < -sinHalf) return 0.0;  // the whole light is below the horizon
+    float bias = sdfSurfaceBias(p, pixelSize, shadow.counts.x);
+    vec3 origin = p + n * bias;
+    float epsilon = max(0.5 * pixelSize, 1e-6 * max(length(p), 1.0));
+    return sdfConeVisibility(origin, l, bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
+                             epsilon);
+}
+
+void main() {
+    uvec3 id = gl_GlobalInvocationID;
+    if (id.x >= shadow.size.x || id.y >= shadow.size.y || id.z >= shadow.counts.z) return;
+    ivec2 low = ivec2(id.xy);
+    ivec2 out_ = ivec2(low.x + int(id.z * shadow.size.x), low.y);
+    ivec2 full = effectsFullPixel(low, ivec2(shadow.size.xy), ivec2(shadow.size.zw));
+    float depth = texelFetch(gbufferDepth, full, 0).r;
+    int li = layerLight(id.z);
+    if (depth <= 0.0 || li < 0) {
+        imageStore(shadowImage, out_, vec4(1.0));
+        return;
+    }
+    vec3 ray = effectsPixelRay(full);
+    vec3 p = view.position.xyz + depth * ray;
+    vec3 n = octDecode(texelFetch(gbufferNormal, full, 0).rg);
+    float pixelSize = shadow.params.y * depth * length(ray);
+    imageStore(shadowImage, out_, vec4(visibility(lights[li], p, n, pixelSize)));
+}
