@@ -91,11 +91,12 @@ struct DrawSource {
     glm::mat4 model{1.0f};
 };
 
-// A visible SdfRenderer that will be traced this frame.
+// A visible SdfRenderer that will be traced this frame (or, occluderOnly, seen by the effects only).
 struct SdfSource {
     ecs::Entity entity;
     const ecs::SdfRenderer* renderer = nullptr;
     glm::mat4 model{1.0f};
+    bool occluder = false;  // SdfRenderer::occluderOnly: a rasterized mesh's field (--mesh-sdf occlusion)
     float sigma = 1.0f;  // smallest singular value of the model's 3x3 part
     uint32_t material = 0;
     const sdf::ShapeProgram* program = nullptr;  // analytic shapes, or
@@ -127,7 +128,8 @@ struct FrameGather {
     std::vector<const GpuMesh*> gpuMeshes;
     std::vector<rhi::TextureHandle> materialTexture;  // per material, albedo frames only
     std::vector<LightSource> lights;
-    std::vector<SdfSource> sdfs;  // ascending entity index
+    std::vector<SdfSource> sdfs;  // traced ones, then occluders, each in ascending entity index
+    uint32_t tracedSdfs = 0;      // sdfs[0, tracedSdfs) are traced
     EffectsDesc effects;          // what the effect passes compute this frame
     bool albedo = false;          // some material has a base-colour texture
     bool hardwareSrgb = false;
@@ -479,6 +481,7 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
             skip(fmt::format("scale ({}, {}, {}) is zero, negative or not finite", sc.x, sc.y, sc.z));
             continue;
         }
+        s.occluder = sr.occluderOnly;
         s.sigma = finite(s.model) ? smallestSingularValue(glm::mat3(s.model)) : 0.0f;
         if (!finite(s.model) || !(s.sigma > 1e-20f) || glm::determinant(glm::mat3(s.model)) <= 0.0f) {
             skip("world matrix is not finite, singular or mirrored");
@@ -486,8 +489,11 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
         }
         g.sdfs.push_back(s);
     }
-    std::sort(g.sdfs.begin(), g.sdfs.end(),
-              [](const SdfSource& a, const SdfSource& b) { return a.entity.index < b.entity.index; });
+    std::sort(g.sdfs.begin(), g.sdfs.end(), [](const SdfSource& a, const SdfSource& b) {
+        return a.occluder != b.occluder ? b.occluder : a.entity.index < b.entity.index;
+    });
+    g.tracedSdfs = uint32_t(
+        std::count_if(g.sdfs.begin(), g.sdfs.end(), [](const SdfSource& s) { return !s.occluder; }));
     return true;
 }
 
@@ -571,7 +577,7 @@ bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGathe
         width = desc.width;
         height = desc.height;
     }
-    const bool drawing = !g.sources.empty() || !g.sdfs.empty();
+    const bool drawing = !g.sources.empty() || g.tracedSdfs > 0;
     if (g.effects.shadowLayers != shadowLayers) {
         release(targets[kShadow]);
         shadowLayers = g.effects.shadowLayers;
@@ -696,7 +702,7 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
         sd.objects.push_back(o);
         hasField = hasField || s.field;
     }
-    sd.tracedCount = uint32_t(sd.objects.size());
+    sd.tracedCount = g.tracedSdfs;
     if (hasField) {
         sd.fields = atlas.fields().data();
         sd.fieldBytes = atlas.fields().size() * sizeof(GpuSdfField);
@@ -757,7 +763,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     out.color = g.external
                     ? graph.importTexture("output", desc.target, desc.targetAccess, desc.targetFinalAccess)
                     : graph.importPersistent("output", targets[kOutput].handle, rhi::Access::CopySrc);
-    if (g.sources.empty() && g.sdfs.empty()) {
+    if (g.sources.empty() && g.tracedSdfs == 0) {
         const glm::vec3 bg = desc.settings.background * desc.settings.exposure;
         std::array<float, 4> encoded{};
         // An sRGB target encodes on write (clears included): give it the linear value.
@@ -791,7 +797,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.nearPlane = cam.nearPlane;
         trace.farPlane = cam.farPlane;
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
-        addSdfTrace(fc, trace);
+        if (g.tracedSdfs > 0) addSdfTrace(fc, trace);  // occluders only: the effects still see them
         if (g.effects.any()) {
             const EffectsDesc& fx = g.effects;
             Effects& e = board.add<Effects>();
@@ -829,7 +835,8 @@ float SceneRenderer::Impl::debugDepthRange(const CameraSetup& cam, const FrameGa
     };
     for (size_t i = 0; i < g.sources.size(); ++i)
         sphere(g.sources[i].model, glm::vec3(0.0f), g.gpuMeshes[i]->radius);
-    for (const GpuSdfObject& o : sdfData.objects) {
+    for (uint32_t i = 0; i < sdfData.tracedCount; ++i) {  // occluders are drawn as meshes
+        const GpuSdfObject& o = sdfData.objects[i];
         const glm::vec3 lo(o.boundsMin), hi(o.boundsMax);
         if (glm::max(glm::abs(lo), glm::abs(hi)).x >= kSdfUnbounded * 0.5f ||
             std::max({std::abs(lo.y), std::abs(hi.y), std::abs(lo.z), std::abs(hi.z)}) >=
@@ -845,7 +852,7 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
                                       uint64_t transientBytes) {
     haveFrame = true;
     lastOwnOutput = !g.external;
-    lastGbuffer = !g.sources.empty() || !g.sdfs.empty();
+    lastGbuffer = !g.sources.empty() || g.tracedSdfs > 0;
     lastAlbedo = lastGbuffer && g.albedo;
     lastAux = lastGbuffer && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings));
     const bool fxRan = lastGbuffer && !g.sdfs.empty();
@@ -873,7 +880,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.memory.sceneBuffers = board.has<SceneBuffers>() ? board.find<SceneBuffers>()->bytes : 0;
     st.memory.renderTargets = targetBytes() + transientBytes;
     st.drawCalls = uint32_t(g.sources.size());
-    st.sdfObjects = uint32_t(g.sdfs.size());
+    st.sdfObjects = g.tracedSdfs;
+    st.sdfOccluders = uint32_t(g.sdfs.size()) - g.tracedSdfs;
     st.memory.sdfAtlas = atlas.bytes();
     st.atlas = {atlas.bytes(),
                 atlas.fill(),

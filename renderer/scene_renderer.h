@@ -17,7 +17,8 @@
 //                              depth, albedo, steps, ids) in the output, or debug_field_slice (the
 //                              SDF scene's distance on a plane; renderer/features/debug_view.h)
 // A pass is only added when the scene needs it (no MeshRenderer: no gbuffer_mesh pass; no
-// SdfRenderer: no sdf_upload or sdf_trace pass).
+// SdfRenderer: no sdf_upload or sdf_trace pass; only occluderOnly SdfRenderers, the mesh fields of
+// --mesh-sdf occlusion: sdf_upload for the effects but no sdf_trace).
 //
 // G-buffer (after mTec thesis 8.2.1, 96 bits per pixel, shared with the SDF passes of later issues):
 //   gbuffer.depth     R32_FLOAT    linear view depth in scene units (0 = nothing hit)
@@ -89,6 +90,7 @@ struct FrameDesc {
     ecs::Entity camera = ecs::kNullEntity;  // must have Camera + Transform
     scene::RenderSettings settings;
     // Optional external colour target (RGBA8_UNORM, or RGBA8_SRGB which encodes in hardware; e.g. a
+    uint32_t sdfOccluders = 0;  // occluderOnly SdfRenderers (mesh fields seen by shadows and AO only)
     // window backbuffer) and the access state
     // it is in; the output is written there instead of the renderer's own texture and left in
     // `targetFinalAccess`.

@@ -77,6 +77,8 @@ struct SdfRenderer {
     std::string bakeMesh{};       // MeshBake: the mesh file (path resolved by the scene loader)
     uint32_t bakeResolution = 0;  // MeshBake: voxels along the longest axis; 0 = automatic (FORMATS.md)
     uint32_t maxSteps = 0;        // sphere-tracing step limit for this object; 0 = the renderer's setting
+    bool occluderOnly = false;    // the baked field of a rasterized mesh (--mesh-sdf occlusion): not
+                                  // traced, used only by shadows and AO (engine/scene/mesh_sdf.h)
 };
 
 const char* sdfSourceName(SdfSource s);  // "none", "shapes", "field", "mesh"

@@ -1,4 +1,5 @@
-// --mesh-sdf: meshes baked to fields and traced (mesh_sdf.h).
+// --mesh-sdf: meshes baked to fields, traced (trace) or used only by shadows and AO (occlusion);
+// the auto mode's resolution (mesh_sdf.h).
 #include "engine/scene/mesh_sdf.h"
 
 #include <algorithm>
@@ -30,6 +31,22 @@ const char* toString(MeshSdfMode mode) {
     return uint32_t(mode) < std::size(kMeshSdfModeNames) ? kMeshSdfModeNames[uint32_t(mode)] : "off";
 }
 
+bool meshOcclusionWanted(const Scene& scene) {
+    if (scene.settings.ao.variant != AoVariant::Off) return true;
+    if (!scene.settings.shadows.enabled) return false;
+    for (auto [e, light] : scene.world.view<ecs::Light>())
+        if (light.castShadows) return true;
+    return false;
+}
+
+MeshSdfMode resolveMeshSdfMode(const Scene& scene, MeshSdfMode mode) {
+    if (mode != MeshSdfMode::Auto) return mode;
+    if (!meshOcclusionWanted(scene)) return MeshSdfMode::Off;
+    for (auto [e, mr] : scene.world.view<ecs::MeshRenderer>())
+        if (mr.visible && mr.mesh != 0) return MeshSdfMode::Occlusion;
+    return MeshSdfMode::Off;
+}
+
 namespace {
 
 std::string entityLabel(const ecs::World& world, ecs::Entity e) {
@@ -39,81 +56,123 @@ std::string entityLabel(const ecs::World& world, ecs::Entity e) {
     return fmt::format("entity #{}", e.index);
 }
 
-}  // namespace
-
-bool applyMeshSdf(Scene& scene, assets::AssetManager& assets, MeshSdfMode mode, std::string& error,
-                  uint32_t resolution) {
-    if (mode == MeshSdfMode::Off) return true;
-    ecs::World& world = scene.world;
-
+// The mesh entities the mode converts, in ascending entity index: visible MeshRenderers with a
+// mesh (occlusion: only those that cast shadows and have no SdfRenderer of their own).
+std::vector<ecs::Entity> meshEntities(const ecs::World& world, MeshSdfMode mode) {
     std::vector<ecs::Entity> entities;
-    for (auto [e, mr] : std::as_const(world).view<ecs::MeshRenderer>()) {
-        if (mr.visible && mr.mesh != 0) entities.push_back(e);
+    for (auto [e, mr] : world.view<ecs::MeshRenderer>()) {
+        if (!mr.visible || mr.mesh == 0) continue;
+        if (mode == MeshSdfMode::Occlusion && !mr.castShadows) continue;
+        if (mode == MeshSdfMode::Occlusion && world.has<ecs::SdfRenderer>(e)) {
+            log::debug(
+                "--mesh-sdf occlusion: {} already has an sdf component; its mesh gets no occlusion field",
+                entityLabel(world, e));
+            continue;
+        }
+        entities.push_back(e);
     }
     std::sort(entities.begin(), entities.end(),
               [](ecs::Entity a, ecs::Entity b) { return a.index < b.index; });
+    return entities;
+}
 
-    // Bake first (each distinct mesh once), change the scene only when every bake worked.
+struct Baked {
+    assets::AssetId field = 0;
+    std::string source;  // the mesh's file, if any
+    bool referenceUsed = false;
+};
+using BakedMeshes = std::unordered_map<assets::AssetId, Baked>;  // mesh -> its field (one reference)
+
+// Bakes each distinct mesh of `entities` once. Trace: the first failure releases every field baked
+// so far and returns false with `error`. Occlusion: a failing mesh is warned about and its entities
+// are removed from `entities`.
+bool bakeMeshes(const ecs::World& world, assets::AssetManager& assets, MeshSdfMode mode, uint32_t resolution,
+                std::vector<ecs::Entity>& entities, BakedMeshes& baked, std::string& error) {
     sdf::BakeSettings settings;
     settings.resolution = resolution;
-    struct Baked {
-        assets::AssetId field = 0;
-        std::string source;  // the mesh's file, if any
-        bool referenceUsed = false;
-    };
-    std::unordered_map<assets::AssetId, Baked> baked;  // mesh -> its field (one reference)
-    auto releaseAll = [&] {
-        for (const auto& [mesh, b] : baked) assets.release(b.field);
-    };
+    const char* modeName = toString(mode);
+    std::vector<ecs::Entity> kept;
+    std::unordered_map<assets::AssetId, bool> failed;  // occlusion: meshes that did not bake
     for (ecs::Entity e : entities) {
-        if (world.has<ecs::SdfRenderer>(e)) {
-            releaseAll();
+        if (mode == MeshSdfMode::Trace && world.has<ecs::SdfRenderer>(e)) {
             error = fmt::format("--mesh-sdf trace: {} has both a mesh and an sdf component",
                                 entityLabel(world, e));
             return false;
         }
         const assets::AssetId mesh = world.get<ecs::MeshRenderer>(e)->mesh;
-        if (baked.count(mesh)) continue;
-        std::string why;
-        assets::AssetId field = 0;
-        if (!assets.mesh(mesh)) {
-            why = fmt::format("mesh asset {:016x} is not loaded", mesh);
-        } else {
-            field = assets.bakeSdf(mesh, settings, why);
+        if (!baked.count(mesh) && !failed.count(mesh)) {
+            std::string why;
+            assets::AssetId field = 0;
+            if (!assets.mesh(mesh)) {
+                why = fmt::format("mesh asset {:016x} is not loaded", mesh);
+            } else {
+                field = assets.bakeSdf(mesh, settings, why);
+            }
+            if (field != 0) {
+                baked.emplace(mesh, Baked{field, assets.info(mesh)->sourcePath, false});
+            } else if (mode == MeshSdfMode::Trace) {
+                error = fmt::format("--mesh-sdf {}: {}: {}", modeName, entityLabel(world, e), why);
+                return false;
+            } else {
+                log::warn("--mesh-sdf {}: {}: {}; the mesh casts no SDF shadows or AO", modeName,
+                          entityLabel(world, e), why);
+                failed.emplace(mesh, true);
+            }
         }
-        if (field == 0) {
-            releaseAll();
-            error = fmt::format("--mesh-sdf trace: {}: {}", entityLabel(world, e), why);
-            return false;
-        }
-        baked.emplace(mesh, Baked{field, assets.info(mesh)->sourcePath, false});
+        if (baked.count(mesh)) kept.push_back(e);
     }
+    entities = std::move(kept);
+    return true;
+}
 
-    for (ecs::Entity e : entities) {
-        const ecs::MeshRenderer mr = *world.get<ecs::MeshRenderer>(e);
-        Baked& b = baked.at(mr.mesh);
-        // One field reference per entity: the first takes the one bakeSdf returned.
-        if (b.referenceUsed) assets.retain(b.field);
-        b.referenceUsed = true;
-        scene.assetRefs.push_back(b.field);
-        ecs::SdfRenderer sr;
-        sr.sdf = b.field;
-        sr.material = mr.material;
-        sr.visible = mr.visible;
-        sr.castShadows = mr.castShadows;
-        sr.source = ecs::SdfSource::MeshBake;
-        sr.bakeMesh = b.source;
-        sr.bakeResolution = resolution;
-        world.remove<ecs::MeshRenderer>(e);
-        world.add<ecs::SdfRenderer>(e, std::move(sr));
-        // The scene no longer uses the mesh: drop the reference it held for this entity.
-        if (auto it = std::find(scene.assetRefs.begin(), scene.assetRefs.end(), mr.mesh);
-            it != scene.assetRefs.end()) {
-            scene.assetRefs.erase(it);
-            assets.release(mr.mesh);
-        }
+// Gives entity `e` the SdfRenderer of its mesh's field (trace: instead of its MeshRenderer).
+void attachField(Scene& scene, assets::AssetManager& assets, MeshSdfMode mode, uint32_t resolution,
+                 ecs::Entity e, Baked& b) {
+    ecs::World& world = scene.world;
+    const ecs::MeshRenderer mr = *world.get<ecs::MeshRenderer>(e);
+    // One field reference per entity: the first takes the one bakeSdf returned.
+    if (b.referenceUsed) assets.retain(b.field);
+    b.referenceUsed = true;
+    scene.assetRefs.push_back(b.field);
+    ecs::SdfRenderer sr;
+    sr.sdf = b.field;
+    sr.material = mr.material;
+    sr.visible = mr.visible;
+    sr.castShadows = mr.castShadows;
+    sr.source = ecs::SdfSource::MeshBake;
+    sr.bakeMesh = b.source;
+    sr.bakeResolution = resolution;
+    sr.occluderOnly = mode == MeshSdfMode::Occlusion;
+    world.add<ecs::SdfRenderer>(e, std::move(sr));
+    if (mode != MeshSdfMode::Trace) return;
+    world.remove<ecs::MeshRenderer>(e);
+    // The scene no longer uses the mesh: drop the reference it held for this entity.
+    if (auto it = std::find(scene.assetRefs.begin(), scene.assetRefs.end(), mr.mesh);
+        it != scene.assetRefs.end()) {
+        scene.assetRefs.erase(it);
+        assets.release(mr.mesh);
     }
-    log::debug("--mesh-sdf trace: {} mesh entities traced as {} baked fields", entities.size(), baked.size());
+}
+
+}  // namespace
+
+bool applyMeshSdf(Scene& scene, assets::AssetManager& assets, MeshSdfMode mode, std::string& error,
+                  uint32_t resolution) {
+    mode = resolveMeshSdfMode(scene, mode);
+    if (mode == MeshSdfMode::Off) return true;
+    if (mode == MeshSdfMode::Occlusion && resolution == 0) resolution = kOcclusionResolution;
+    std::vector<ecs::Entity> entities = meshEntities(scene.world, mode);
+    // Bake first (each distinct mesh once), change the scene only when every bake worked.
+    BakedMeshes baked;
+    if (!bakeMeshes(scene.world, assets, mode, resolution, entities, baked, error)) {
+        for (const auto& [mesh, b] : baked) assets.release(b.field);
+        return false;
+    }
+    for (ecs::Entity e : entities)
+        attachField(scene, assets, mode, resolution, e,
+                    baked.at(scene.world.get<ecs::MeshRenderer>(e)->mesh));
+    log::debug("--mesh-sdf {}: {} mesh entities got {} baked fields", toString(mode), entities.size(),
+               baked.size());
     return true;
 }
 

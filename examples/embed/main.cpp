@@ -12,6 +12,7 @@
 #include "engine/ecs/components.h"
 #include "engine/engine.h"
 #include "engine/image/image.h"
+#include "engine/scene/mesh_sdf.h"
 #include "renderer/renderer.h"
 
 namespace {
@@ -90,7 +91,12 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "engine: %s\n", error.c_str());
         return 1;
     }
-    const bool ok = scenePath.empty() ? buildWorld(*engine, error) : engine->loadScene(scenePath, error);
+    // A loaded scene's render.meshSdf (default auto: with shadows or AO on, its meshes get coarse
+    // baked fields so that they cast SDF shadows and AO; engine/scene/mesh_sdf.h).
+    const bool ok = scenePath.empty() ? buildWorld(*engine, error)
+                                      : engine->loadScene(scenePath, error) &&
+                                            scene::applyMeshSdf(engine->scene(), engine->assets(),
+                                                                engine->settings().meshSdf, error);
     if (!ok) {
         std::fprintf(stderr, "scene: %s\n", error.c_str());
         return 1;

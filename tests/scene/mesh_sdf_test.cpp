@@ -1,6 +1,7 @@
 // Meshes as SDFs: scene `sdf` components with "mesh" are baked at load time (AssetManager::bakeSdf:
-// one field per mesh and resolution), and applyMeshSdf (--mesh-sdf trace) turns every visible
-// mesh of a JSON or glTF scene into an SdfRenderer of its baked field, atomically.
+// one field per mesh and resolution), applyMeshSdf (--mesh-sdf trace) turns every visible mesh of a
+// JSON or glTF scene into an SdfRenderer of its baked field, atomically; --mesh-sdf occlusion gives
+// meshes an occluder-only field beside their MeshRenderer, and auto resolves from the effects.
 #include <gtest/gtest.h>
 
 #include <set>
@@ -52,6 +53,12 @@ TEST(MeshSdfMode, ParsesAndNames) {
     EXPECT_EQ(m, MeshSdfMode::Trace);
     EXPECT_STREQ(toString(MeshSdfMode::Off), "off");
     EXPECT_STREQ(toString(MeshSdfMode::Trace), "trace");
+    EXPECT_TRUE(parseMeshSdfMode("occlusion", m));
+    EXPECT_EQ(m, MeshSdfMode::Occlusion);
+    EXPECT_TRUE(parseMeshSdfMode("auto", m));
+    EXPECT_EQ(m, MeshSdfMode::Auto);
+    EXPECT_STREQ(toString(MeshSdfMode::Occlusion), "occlusion");
+    EXPECT_STREQ(toString(MeshSdfMode::Auto), "auto");
 }
 
 // Criterion: an sdf component with "mesh" carries a baked SdfField asset after loading (source
@@ -235,6 +242,121 @@ TEST_F(MeshSdfTest, TraceFailureIsClearAndAtomic) {
     EXPECT_EQ(s.assetRefs.size(), refsBefore);
     unloadScene(s, m_assets);
     EXPECT_EQ(m_assets.count(), 0u);
+}
+
+// Criterion: Occlusion keeps every MeshRenderer and gives each visible shadow-casting mesh an
+// occluder-only SdfRenderer of its field (MeshBake, the mesh's material, castShadows) at
+// kOcclusionResolution when given 0; meshes that cast no shadows, invisible meshes and entities
+// with their own sdf component get none; each distinct mesh is baked once; a second application
+// changes nothing; unloading frees everything.
+TEST_F(MeshSdfTest, OcclusionAddsOccluderFieldsBesideMeshes) {
+    Scene s;
+    std::string error;
+    ASSERT_TRUE(parse(R"({"version": 2, "materials": {"red": {"baseColor": [1, 0, 0]}}, "entities": [
+        {"name": "box", "mesh": {"file": "box.ply", "material": "red"}},
+        {"name": "box twin", "transform": {"position": [2, 0, 0]}, "mesh": {"file": "box.ply"}},
+        {"name": "no shadow", "mesh": {"file": "box.ply", "castShadows": false}},
+        {"name": "hidden", "mesh": {"primitive": {"shape": "torus"}, "visible": false}},
+        {"name": "both", "mesh": {"primitive": {"shape": "sphere"}}, "sdf": {"shape": {"shape": "sphere", "radius": 1}}}]})",
+                      s, error))
+        << error;
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Occlusion, error)) << error;
+    EXPECT_EQ(s.world.count<ecs::MeshRenderer>(), 5u);  // all kept
+    EXPECT_EQ(s.world.count<ecs::SdfRenderer>(), 3u);   // box, box twin, both (its own)
+    EXPECT_EQ(m_assets.cacheStats().sdfBakes, 1u);      // the box once
+    const ecs::SdfRenderer* box = sdfOf(s, "box");
+    const ecs::SdfRenderer* twin = sdfOf(s, "box twin");
+    ASSERT_TRUE(box && twin);
+    EXPECT_TRUE(box->occluderOnly);
+    EXPECT_EQ(box->source, ecs::SdfSource::MeshBake);
+    EXPECT_EQ(box->material, s.world.get<ecs::MeshRenderer>(entityNamed(s.world, "box"))->material);
+    EXPECT_TRUE(box->castShadows && box->visible);
+    EXPECT_EQ(box->sdf, twin->sdf);
+    EXPECT_EQ(m_assets.refCount(box->sdf), 2u);
+    EXPECT_EQ(box->bakeResolution, kOcclusionResolution);
+    ASSERT_NE(m_assets.sdfField(box->sdf), nullptr);
+    EXPECT_EQ(m_assets.sdfField(box->sdf)->header.dims, glm::uvec3(kOcclusionResolution));
+    EXPECT_EQ(sdfOf(s, "no shadow"), nullptr);
+    EXPECT_EQ(sdfOf(s, "hidden"), nullptr);
+    EXPECT_FALSE(sdfOf(s, "both")->occluderOnly);
+    EXPECT_EQ(sdfOf(s, "both")->source, ecs::SdfSource::Shapes);
+
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Occlusion, error)) << error;
+    EXPECT_EQ(s.world.count<ecs::SdfRenderer>(), 3u);
+    EXPECT_EQ(m_assets.cacheStats().sdfBakes, 1u);
+    unloadScene(s, m_assets);
+    EXPECT_EQ(m_assets.count(), 0u);
+}
+
+// Criterion: under Occlusion a mesh that cannot be baked is skipped (warning), the others still get
+// their fields and the call succeeds (occlusion is on by default: a degenerate mesh must not fail a
+// scene that rasterizes).
+TEST_F(MeshSdfTest, OcclusionSkipsMeshesThatCannotBeBaked) {
+    Scene s;
+    std::string error;
+    ASSERT_TRUE(parse(R"({"version": 2, "entities": [
+        {"name": "good", "mesh": {"file": "box.ply"}},
+        {"name": "bad", "mesh": {"file": "flat.ply"}}]})",
+                      s, error))
+        << error;
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Occlusion, error, 16)) << error;
+    ASSERT_NE(sdfOf(s, "good"), nullptr);
+    EXPECT_TRUE(sdfOf(s, "good")->occluderOnly);
+    EXPECT_EQ(sdfOf(s, "bad"), nullptr);
+    EXPECT_EQ(s.world.count<ecs::MeshRenderer>(), 2u);
+    unloadScene(s, m_assets);
+    EXPECT_EQ(m_assets.count(), 0u);
+}
+
+// Criterion: Auto is Occlusion exactly when the settings turn on an effect meshes can occlude
+// (shadows enabled with a shadow-casting light, or an AO variant) and a visible mesh exists;
+// otherwise Off (nothing baked). Off, Trace and Occlusion resolve to themselves.
+TEST_F(MeshSdfTest, AutoResolvesFromTheEffects) {
+    Scene s;
+    std::string error;
+    ASSERT_TRUE(parse(R"({"version": 2, "entities": [
+        {"name": "sun", "light": {"type": "directional", "castShadows": false}},
+        {"name": "box", "mesh": {"file": "box.ply"}}]})",
+                      s, error))
+        << error;
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Trace), MeshSdfMode::Trace);
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Off), MeshSdfMode::Off);
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Occlusion), MeshSdfMode::Occlusion);
+    EXPECT_EQ(s.settings.meshSdf, MeshSdfMode::Auto);  // the default
+    // No shadow-casting light and AO off: nothing to occlude.
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Auto), MeshSdfMode::Off);
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Auto, error)) << error;
+    EXPECT_EQ(s.world.count<ecs::SdfRenderer>(), 0u);
+    // AO on: occlusion.
+    s.settings.ao.variant = AoVariant::Cones;
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Auto), MeshSdfMode::Occlusion);
+    // A shadow-casting light with shadows enabled: occlusion; shadows disabled: off.
+    s.settings.ao.variant = AoVariant::Off;
+    s.world.get<ecs::Light>(entityNamed(s.world, "sun"))->castShadows = true;
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Auto), MeshSdfMode::Occlusion);
+    s.settings.shadows.enabled = false;
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Auto), MeshSdfMode::Off);
+    s.settings.shadows.enabled = true;
+    // No visible mesh: off.
+    s.world.get<ecs::MeshRenderer>(entityNamed(s.world, "box"))->visible = false;
+    EXPECT_EQ(resolveMeshSdfMode(s, MeshSdfMode::Auto), MeshSdfMode::Off);
+    s.world.get<ecs::MeshRenderer>(entityNamed(s.world, "box"))->visible = true;
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Auto, error, 16)) << error;
+    ASSERT_NE(sdfOf(s, "box"), nullptr);
+    EXPECT_TRUE(sdfOf(s, "box")->occluderOnly);
+    unloadScene(s, m_assets);
+}
+
+// Criterion: the render block's "meshSdf" reads all four modes (default auto).
+TEST_F(MeshSdfTest, SceneSettingReadsEveryMode) {
+    for (const char* name : {"off", "trace", "occlusion", "auto"}) {
+        Scene s;
+        std::string error;
+        ASSERT_TRUE(
+            parse(std::string(R"({"version": 2, "render": {"meshSdf": ")") + name + R"("}})", s, error))
+            << error;
+        EXPECT_STREQ(toString(s.settings.meshSdf), name);
+    }
 }
 
 }  // namespace

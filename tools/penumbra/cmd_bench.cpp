@@ -18,6 +18,7 @@
 #include "engine/core/output_file.h"
 #include "engine/ecs/components.h"
 #include "engine/engine.h"
+#include "engine/scene/mesh_sdf.h"
 #include "renderer/renderer.h"
 
 namespace penumbra::cli {
@@ -176,6 +177,12 @@ int runBackend(const BenchTraceOptions& opt, rhi::Backend backend, const std::st
     if (engine->world().count<ecs::SdfRenderer>() == 0) {
         log::error("bench trace: {}: the scene has no SDF objects (sdf components): nothing to trace",
                    opt.scene);
+        return 1;
+    }
+    // As penumbra render runs it: the scene's render.meshSdf (auto: occlusion fields for its meshes
+    // when shadows or AO are on).
+    if (!scene::applyMeshSdf(engine->scene(), engine->assets(), settings.meshSdf, error)) {
+        log::error("bench trace: {}: {}", opt.scene, error);
         return 1;
     }
     if (scene::findCamera(engine->world(), settings.camera) == ecs::kNullEntity) {

@@ -108,6 +108,7 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                    {"drawCalls", stats.drawCalls},
                    {"triangles", stats.triangles}};
     j["assetCache"] = {{"dir", run.cacheDir},
+                   {"sdfOccluders", stats.sdfOccluders},
                        {"hits", assets.cacheStats().hits},
                        {"misses", assets.cacheStats().misses},
                        {"writes", assets.cacheStats().writes},
@@ -158,11 +159,13 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "~/.cache/penumbra)");
     cmd->add_flag("--no-cache", opt.noCache, "Do not read or write the processed-asset cache");
     cmd->add_option("--mesh-sdf", opt.meshSdf,
-                    "off: meshes are rasterized; trace: every visible mesh is baked to a signed distance "
-                    "field (automatic medium resolution, cached in <cache-dir>/sdf) and sphere-traced "
-                    "instead, for comparisons")
-        ->check(CLI::IsMember({"off", "trace"}))
-        ->capture_default_str();
+                    "How meshes take part in the SDF passes (replaces the scene's render.meshSdf, default "
+                    "auto): off: rasterized only (they cast no SDF shadows or AO); trace: every visible mesh "
+                    "is baked to a signed distance field (automatic medium resolution, cached in "
+                    "<cache-dir>/sdf) and sphere-traced instead, for comparisons; occlusion: meshes stay "
+                    "rasterized and get a coarse baked field (64 voxels) used only by shadows and AO; "
+                    "auto: occlusion when shadows or AO are on and the scene has meshes, else off")
+        ->check(CLI::IsMember({"off", "trace", "occlusion", "auto"}));
     cmd->add_option("--plugin-dir", opt.pluginDir, "Load shared-library plugins (*.so) from this folder");
     cmd->add_option("--shading", opt.shading, "Override the scene's shading model")
         ->check(CLI::IsMember({"cook-torrance", "blinn-phong"}));
@@ -238,12 +241,6 @@ int runRender(const RenderOptions& opt) {
         log::error("{}", error);
         return 1;
     }
-    scene::MeshSdfMode meshSdf = scene::MeshSdfMode::Off;
-    scene::parseMeshSdfMode(opt.meshSdf, meshSdf);
-    if (!scene::applyMeshSdf(engine->scene(), engine->assets(), meshSdf, error)) {
-        log::error("{}: {}", opt.scene, error);
-        return 1;
-    }
     scene::RenderSettings& settings = engine->settings();
     if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
     if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
@@ -258,6 +255,12 @@ int runRender(const RenderOptions& opt) {
     if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
         log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
         return 1;
+    // After the effect overrides: auto looks at them.
+    if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
+    if (!scene::applyMeshSdf(engine->scene(), engine->assets(), settings.meshSdf, error)) {
+        log::error("{}: {}", opt.scene, error);
+        return 1;
+    }
     }
 
     std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);

@@ -26,7 +26,7 @@ struct RenderOptions {
     std::string graphviz;
     std::string cacheDir;  // empty: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra or ~/.cache/penumbra
     bool noCache = false;
-    std::string meshSdf = "off";  // --mesh-sdf off | trace (engine/scene/mesh_sdf.h)
+    std::string meshSdf;  // --mesh-sdf off | trace | occlusion | auto; empty: the scene's render.meshSdf
     std::string pluginDir;        // empty: none
     std::string shading;          // override: cook-torrance | blinn-phong
     std::string toneMapper;       // override: clamp | reinhard | aces

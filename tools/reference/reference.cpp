@@ -818,7 +818,9 @@ bool buildFromWorld(const ecs::World& world, const assets::AssetManager& assets,
     std::vector<std::pair<ecs::Entity, const ecs::SdfRenderer*>> sdfs;
     for (auto [e, sr, t] : world.view<const ecs::SdfRenderer, const ecs::Transform>()) {
         (void)t;
-        if (sr.visible && sr.sdf != 0 && sr.source != ecs::SdfSource::None) sdfs.push_back({e, &sr});
+        // occluderOnly: a rasterized mesh's baked field (--mesh-sdf occlusion); the mesh itself is exact.
+        if (sr.visible && sr.sdf != 0 && sr.source != ecs::SdfSource::None && !sr.occluderOnly)
+            sdfs.push_back({e, &sr});
     }
     std::sort(sdfs.begin(), sdfs.end(), byIndex);
     std::map<std::string, const assets::MeshData*> loadedMeshes;  // bakeMesh path -> mesh
