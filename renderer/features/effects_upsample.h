@@ -1,11 +1,28 @@
-// Feature "effects_upsample": bilateral upsampling (renderer/features/effects.h orders the effects). NOT YET
-// IMPLEMENTED.
+// Feature "effects_upsample": the compute pass "effects_upsample" that brings the low-resolution
+// shadow layers and AO (EffectsLowRes, written by sdf_shadow / sdf_ao below full resolution) to the
+// frame's resolution (Effects::shadow, Effects::ao) with a depth- and normal-aware bilateral filter
+// (renderer/shaders/effects_upsample.comp). renderer/features/effects.h orders it after the modules.
+//
+// For a full-resolution pixel p (linear depth d, normal n) each of the 3x3 low-resolution pixels
+// around p's position on the low-resolution grid stands for its source pixel's G-buffer (d_i, n_i;
+// the convention of effectsFullPixel, renderer/shaders/effects.glsl). Its weight is
+//   bilinear(p, i) * exp(-(r / 0.02)^2) * max(dot(n, n_i), 0)^8
+// with r the relative depth difference min(|d_i - d|, |d_i - d_plane|) / d, d_plane the depth where
+// the source pixel's camera ray meets p's tangent plane (slanted surfaces keep their neighbours).
+// The bilinear tent makes only the 2x2 around p count; when their weights sum below 1e-3 (p is at
+// a depth or normal edge, none of the four lies on its surface) the value of the most similar of
+// the 3x3 is copied instead: the nearest depth among those facing within 60 degrees of n (any if
+// none). So a value never crosses a depth discontinuity unless no low-resolution pixel of the
+// surface lies within 1.5 low-resolution pixels. Background pixels get shadow 1 and AO 1 with a
+// zero bent normal. The AO texel's bent normal (gba) is averaged and renormalized.
 #pragma once
 
 #include "renderer/features/effects.h"
 
 namespace penumbra::render {
 
+// Reads SceneBuffers (view), GBuffer (depth, normal), EffectsLowRes; writes Effects::shadow (every
+// layer) when EffectsLowRes::shadow is valid and Effects::ao when EffectsLowRes::ao is.
 void addEffectsUpsample(FrameContext& fc, const EffectsDesc& desc);
 
 }  // namespace penumbra::render
