@@ -225,6 +225,24 @@ struct SceneRenderer::Impl {
         return true;
     }
 
+    // What the frame's effects ran and hold (call after buildGraph: reads EffectsLowRes).
+    EffectsReport effectsReport(const FrameGather& g) const {
+        EffectsReport r;
+        if (!lastEffect[kShadow] && !lastEffect[kAo] && !lastEffect[kThickness] && !lastEffect[kReflection])
+            return r;
+        r.shadowLayers = lastEffect[kShadow] ? g.effects.shadowLayers : 0;
+        r.ao = lastEffect[kAo] ? scene::toString(g.effects.ao.variant) : "off";
+        r.thickness = lastEffect[kThickness];
+        r.reflection = lastEffect[kReflection];
+        for (TargetId id : {kShadow, kAo, kThickness, kReflection}) r.targetBytes += targets[id].bytes;
+        if (const EffectsLowRes* low = board.find<EffectsLowRes>()) {
+            if (low->shadow.isValid())
+                r.lowResBytes += uint64_t(low->shadowWidth) * r.shadowLayers * low->shadowHeight;  // R8
+            if (low->ao.isValid()) r.lowResBytes += uint64_t(low->aoWidth) * low->aoHeight * 4;  // RGBA8
+        }
+        return r;
+    }
+
     uint64_t targetBytes() const {
         uint64_t total = 0;
         for (const Target& t : targets) total += t.bytes;
@@ -878,7 +896,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.memory.meshBuffers = cache.meshBytes();
     st.memory.textures = cache.textureBytes();
     st.memory.sceneBuffers = board.has<SceneBuffers>() ? board.find<SceneBuffers>()->bytes : 0;
-    st.memory.renderTargets = targetBytes() + transientBytes;
+    st.effects = effectsReport(g);
+    st.memory.renderTargets = targetBytes() + transientBytes + st.effects.lowResBytes;
     st.drawCalls = uint32_t(g.sources.size());
     st.sdfObjects = g.tracedSdfs;
     st.sdfOccluders = uint32_t(g.sdfs.size()) - g.tracedSdfs;

@@ -73,12 +73,23 @@ struct AtlasReport {
     const char* format = "none";
 };
 
+// The SDF effects of the frame (renderer/features/effects.h): which ran, and their targets' memory.
+struct EffectsReport {
+    uint32_t shadowLayers = 0;  // shadowed lights this frame = layers of effects.shadow (0: no sdf_shadow)
+    const char* ao = "off";     // the AO variant that ran ("off": no sdf_ao, no effects.ao)
+    bool thickness = false;     // sdf_thickness ran (effects.thickness)
+    bool reflection = false;    // sdf_reflection ran (effects.reflection)
+    uint64_t targetBytes = 0;   // the full-resolution effect targets (in MemoryReport::renderTargets)
+    uint64_t lowResBytes = 0;   // the low-resolution shadow / AO transients (in renderTargets too)
+};
+
 struct FrameStats {
     std::vector<fg::PassTiming> passes;  // executed passes in order
     MemoryReport memory;
     uint32_t drawCalls = 0;
     uint32_t sdfObjects = 0;  // SdfRenderer entities traced
     AtlasReport atlas;
+    EffectsReport effects;
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;

@@ -9,6 +9,7 @@
 #include <glm/geometric.hpp>
 
 #include "renderer/features/debug_field_slice.h"
+#include "renderer/features/effects.h"
 #include "renderer/features/fullscreen.h"
 
 namespace penumbra::render {
@@ -62,7 +63,25 @@ bool parseSlicePlane(std::string_view text, glm::vec4& out, std::string& error) 
     return true;
 }
 
-// Steps and ids (modes 3, 4) read gbuffer.aux: variant AUX; albedo (mode 2) the albedo target.
+// The effect target a view shows (invalid: not an effect view, or the effect did not run).
+fg::TextureRef effectTarget(const FrameContext& fc, DebugView view) {
+    const Effects* fx = fc.board.find<Effects>();
+    if (!fx) return {};
+    switch (view) {
+        case DebugView::Ao:
+        case DebugView::BentNormal:
+            return fx->ao;
+        case DebugView::Shadow:
+            return fx->shadowLayers > 0 ? fx->shadow : fg::TextureRef{};
+        case DebugView::Thickness:
+            return fx->thickness;
+        default:
+            return {};
+    }
+}
+
+// Steps and ids (modes 3, 4) read gbuffer.aux: variant AUX; albedo (mode 2) the albedo target; the
+// effect views (modes 6..9) their effect's target: variant EFFECTS.
 void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
     if (desc.view == DebugView::FieldSlice) {
         addDebugFieldSlice(fc, {desc.slice, desc.fieldSafety, desc.nearPlane, desc.farPlane});
@@ -72,14 +91,17 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
     struct Data {
         SceneBuffers scene;
         GBuffer gb;
+        fg::TextureRef effect;
         fg::TextureRef output;
     };
     // 1. Choose the shader variant; the program's pipeline and sampler come from the cache.
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const bool aux = (desc.view == DebugView::Steps || desc.view == DebugView::Ids) && gbuffer.aux.isValid();
+    const fg::TextureRef effect = effectTarget(fc, desc.view);
     using V = program::Variant;
-    const V variant =
-        gbuffer.albedo.isValid() ? (aux ? V::AlbedoAux : V::Albedo) : (aux ? V::Aux : V::Default);
+    const V variant = effect.isValid()       ? V::Effects
+                      : gbuffer.albedo.isValid() ? (aux ? V::AlbedoAux : V::Albedo)
+                                                 : (aux ? V::Aux : V::Default);
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     // 2. The push-constant block, through the struct shaderc generated from the shader.
@@ -91,12 +113,15 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
         [&](fg::PassBuilder& b, Data& d) {
             d.scene = *fc.board.find<SceneBuffers>();
             d.gb = gbuffer;
+            if (effect.isValid()) d.gb.albedo = {};  // the EFFECTS variant does not read albedo
+            d.effect = effect;
             d.output = b.write(fc.board.find<Output>()->color, rhi::Access::ColorTarget);
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.materials, rhi::Access::ShaderRead);
             readGBuffer(b, d.gb);
             if (aux) b.read(d.gb.aux, rhi::Access::ShaderSampled);
+            if (effect.isValid()) b.read(d.effect, rhi::Access::ShaderSampled);
         },
         // 4. Record: bind parameters by name, push constants, draw the full-screen triangle.
         [&cache = fc.cache, prog, push, aux](const Data& d, fg::PassContext& ctx) {
@@ -107,6 +132,7 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
                 .set("Materials", ctx.buffer(d.scene.materials));
             setGBuffer(params, ctx, d.gb, prog.nearest);
             if (aux) params.set("gbufferAux", ctx.texture(d.gb.aux), prog.nearest);
+            if (d.effect.isValid()) params.set("effectTexture", ctx.texture(d.effect), prog.nearest);
             ctx.cmd.pushConstants(&push, sizeof(push));
             drawFullscreen(ctx, params, cache, prog.pipeline);
         });

@@ -18,6 +18,15 @@
 //   ids          entity index (gbuffer.aux x, meshes and SDF objects) as a stable hash colour:
 //                rgb = 0.2 + 0.8 * (bytes 0, 1, 2 of pcg32(index)) / 255, the same for an index in
 //                every frame and on every backend; background (-1) black
+//   ao           ambient occlusion (effects.ao r), grey: white = unoccluded
+//   shadow       visibility of the first shadowed light (effects.shadow layer 0), grey: white = lit
+//   bentnormal   the AO pass's bent normal (effects.ao gba, unit) * 0.5 + 0.5
+//   thickness    t / (t + r) grey, t the subsurface thickness (effects.thickness, scene units), r the
+//                pixel material's subsurfaceRadius: black = none, mid grey t = r, white = thick
+//                The four effect views show black on the background. They read the effect's full-
+//                resolution target (renderer/features/effects.h); when the effect did not run (AO
+//                off, no shadowed light, no subsurface material, no SDF object) they show what the
+//                lighting pass uses instead: AO and shadow white, the shading normal, thickness black.
 //   field-slice  the pass "debug_field_slice" (renderer/features/debug_field_slice.h) instead of
 //                this one: the signed distance of the SDF scene on a plane
 // Ids and steps read gbuffer.aux: the scene renderer writes it for them (frameNeedsAux) whether or
@@ -36,7 +45,8 @@
 namespace penumbra::render {
 
 // The enumeration and its names live with the scene settings (render.debugView); these are the same
-// functions: "none", "normals", "depth", "albedo", "steps", "ids", "field-slice".
+// functions: "none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao", "shadow",
+// "bentnormal", "thickness".
 using scene::DebugView;
 using scene::parseDebugView;
 using scene::toString;
@@ -61,8 +71,8 @@ struct DebugViewDesc {
     float farPlane = 1000.0f;
 };
 
-// Reads SceneBuffers and GBuffer (gbuffer.aux for ids and steps), writes Output. Field-slice reads
-// SceneBuffers and SdfSceneBuffers instead (renderer/features/debug_field_slice.h).
+// Reads SceneBuffers and GBuffer (gbuffer.aux for ids and steps, Effects for the effect views),
+// writes Output. Field-slice reads SceneBuffers and SdfSceneBuffers instead (renderer/features/debug_field_slice.h).
 void addDebugView(FrameContext& fc, const DebugViewDesc& desc);
 
 }  // namespace penumbra::render

@@ -6,8 +6,16 @@
 //   mode 2 albedo   base colour (variant ALBEDO: the albedo target, else the material's colour)
 //   mode 3 steps    trace steps / step limit through the heat ramp (variant AUX)
 //   mode 4 ids      hash colour of the entity index, black for -1 (variant AUX)
+//   mode 6 ao          ambient occlusion, grey (effects.ao r)                       (variant EFFECTS)
+//   mode 7 shadow      visibility of the first shadowed light, grey (effects.shadow layer 0)
+//   mode 8 bentnormal  bent normal * 0.5 + 0.5 (effects.ao gba)
+//   mode 9 thickness   t / (t + r), t the thickness (effects.thickness, scene units), r the material's
+//                      subsurfaceRadius: 0 black (none), t = r mid grey, thick white
+// The effect views bind the effect's target as effectTexture (variant EFFECTS); without it (the
+// effect did not run) they show what lighting uses then: AO and shadow 1, the shading normal,
+// thickness 0.
 #version 450
-#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX
+#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX EFFECTS
 #include "scene.glsl"
 #include "gbuffer.glsl"
 #include "brdf.glsl"
@@ -23,6 +31,9 @@ layout(set = 2, binding = 3) uniform sampler2D gbufferAlbedo;
 #endif
 #ifdef AUX
 layout(set = 2, binding = 4) uniform sampler2D gbufferAux;
+#endif
+#ifdef EFFECTS
+layout(set = 2, binding = 5) uniform sampler2D effectTexture;
 #endif
 
 layout(push_constant) uniform DebugView {
@@ -52,12 +63,31 @@ vec3 idColour(uint id) {
     return 0.2 + 0.8 * vec3(float(h & 255u), float((h >> 8u) & 255u), float((h >> 16u) & 255u)) / 255.0;
 }
 
+// Modes 6..9 on a surface pixel (see above).
+vec3 effectView(uint mode, ivec2 pixel) {
+    vec3 normal = octDecode(texelFetch(gbufferNormal, pixel, 0).rg);
+#ifdef EFFECTS
+    vec4 e = texelFetch(effectTexture, pixel, 0);
+    if (mode == 6u || mode == 7u) return vec3(e.r);
+    if (mode == 8u) {
+        vec3 bent = e.gba * 2.0 - 1.0;
+        return (dot(bent, bent) > 1e-6 ? normalize(bent) : normal) * 0.5 + 0.5;
+    }
+    float radius = max(materials[unpackMaterialIndex(texelFetch(gbufferMaterial, pixel, 0))].subsurface.w, 1e-6);
+    return vec3(max(e.r, 0.0) / (max(e.r, 0.0) + radius));
+#else
+    return mode == 8u ? normal * 0.5 + 0.5 : vec3(mode == 9u ? 0.0 : 1.0);
+#endif
+}
+
 void main() {
     ivec2 pixel = ivec2(gl_FragCoord.xy);
     float depth = texelFetch(gbufferDepth, pixel, 0).r;
     uint mode = debugView.mode.x;
     vec3 value = vec3(0.0);
-    if (mode >= 3u) {
+    if (mode >= 6u) {
+        if (depth > 0.0) value = effectView(mode, pixel);
+    } else if (mode >= 3u) {
 #ifdef AUX
         vec2 aux = texelFetch(gbufferAux, pixel, 0).rg;
         if (mode == 3u) {

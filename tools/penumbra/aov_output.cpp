@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstring>
 #include <filesystem>
+#include <map>
 #include <sstream>
 
 #include <fmt/format.h>
@@ -16,15 +17,47 @@
 namespace penumbra::cli {
 namespace {
 
-constexpr const char* kAovNames = "depth, normal, ids, steps";
+constexpr const char* kAovNames = "depth, normal, ids, steps, ao, shadow, shadowN, bentnormal, thickness";
 
-bool parseAovName(const std::string& name, RenderAov& out) {
-    for (RenderAov a : {RenderAov::Depth, RenderAov::Normal, RenderAov::Ids, RenderAov::Steps})
+bool parseAovName(const std::string& name, AovOutput& out) {
+    for (RenderAov a : {RenderAov::Depth, RenderAov::Normal, RenderAov::Ids, RenderAov::Steps, RenderAov::Ao,
+                        RenderAov::Shadow, RenderAov::BentNormal, RenderAov::Thickness})
         if (name == aovName(a)) {
-            out = a;
+            out.kind = a;
             return true;
         }
-    return false;
+    // shadowN: shadowed light N (decimal, from 0)
+    const std::string digits = name.size() > 6 && name.rfind("shadow", 0) == 0 ? name.substr(6) : "";
+    if (digits.empty() || digits.size() > 6 ||
+        !std::all_of(digits.begin(), digits.end(), [](unsigned char c) { return std::isdigit(c); }))
+        return false;
+    out.kind = RenderAov::Shadow;
+    out.light = uint32_t(std::stoul(digits));
+    return true;
+}
+
+bool isEffectAov(RenderAov a) {
+    return a == RenderAov::Ao || a == RenderAov::Shadow || a == RenderAov::BentNormal || a == RenderAov::Thickness;
+}
+
+// The effect target an effect AOV reads and, when it was not part of the frame, what turns it on.
+const char* effectTarget(RenderAov a) {
+    return a == RenderAov::Shadow      ? "effects.shadow"
+           : a == RenderAov::Thickness ? "effects.thickness"
+                                       : "effects.ao";
+}
+const char* effectHint(RenderAov a) {
+    switch (a) {
+        case RenderAov::Shadow:
+            return "no shadow pass ran in the last frame: shadows need a light with castShadows, shadows on "
+                   "(--shadows on|hard, render.shadows.enabled) and SDF objects in the frame";
+        case RenderAov::Thickness:
+            return "no thickness pass ran in the last frame: it needs a material with subsurface > 0 and SDF "
+                   "objects in the frame";
+        default:
+            return "AO did not run in the last frame: turn it on with --ao five-tap|multi-ray|cones "
+                   "(render.ao.variant); it needs SDF objects in the frame";
+    }
 }
 
 bool hasPfmExtension(const std::string& path) {
@@ -73,8 +106,21 @@ const char* aovName(RenderAov aov) {
             return "ids";
         case RenderAov::Steps:
             return "steps";
+        case RenderAov::Ao:
+            return "ao";
+        case RenderAov::Shadow:
+            return "shadow";
+        case RenderAov::BentNormal:
+            return "bentnormal";
+        case RenderAov::Thickness:
+            return "thickness";
     }
     return "?";
+}
+
+std::string aovLabel(const AovOutput& aov) {
+    return aov.kind == RenderAov::Shadow && aov.light > 0 ? fmt::format("shadow{}", aov.light)
+                                                          : std::string(aovName(aov.kind));
 }
 
 CLI::Option* addAovOption(CLI::App* cmd, std::string& spec) {
@@ -82,7 +128,8 @@ CLI::Option* addAovOption(CLI::App* cmd, std::string& spec) {
         "--aov", spec,
         "Also write float images of the last frame as PFM, comma-separated NAME=PATH.pfm: depth (linear view "
         "depth, 0: nothing hit), normal (world unit normal), ids (entity index, -1: background), steps "
-        "(sphere-trace steps); docs/FORMATS.md \"AOV images\"");
+        "(sphere-trace steps), ao (ambient occlusion), shadow / shadowN (visibility of the first / Nth shadowed "
+        "light), bentnormal (AO bent normal), thickness (subsurface thickness); docs/FORMATS.md \"AOV images\"");
 }
 
 bool parseAovOutputs(const std::string& spec, std::vector<AovOutput>& out, std::string& error) {
@@ -100,12 +147,12 @@ bool parseAovOutputs(const std::string& spec, std::vector<AovOutput>& out, std::
         AovOutput a;
         const std::string name = item.substr(0, eq);
         a.path = item.substr(eq + 1);
-        if (!parseAovName(name, a.kind)) {
+        if (!parseAovName(name, a)) {
             error = fmt::format("--aov {}: unknown AOV '{}' ({})", item, name, kAovNames);
             return false;
         }
         for (const AovOutput& o : out)
-            if (o.kind == a.kind) {
+            if (o.kind == a.kind && o.light == a.light) {
                 error = fmt::format("--aov: AOV '{}' is listed twice", name);
                 return false;
             }
@@ -176,17 +223,94 @@ bool convertAov(RenderAov aov, uint32_t width, uint32_t height, const TargetTexe
             for (size_t i = 0; i < pixels; ++i) out.data[i] = floatAt(*aux, i * 2 + channel);
             return true;
         }
+        case RenderAov::Ao:
+        case RenderAov::Shadow:
+        case RenderAov::BentNormal:
+        case RenderAov::Thickness:
+            error = "an effect AOV (convertEffectAov converts it)";
+            return false;
     }
     error = "unknown AOV";
     return false;
 }
+
+bool convertEffectAov(const AovOutput& aov, uint32_t width, uint32_t height, const TargetTexels& depth,
+                      const TargetTexels& effect, reference::FloatImage& out, std::string& error) {
+    if (!checkTarget(&depth, "gbuffer.depth", rhi::Format::R32_FLOAT, width, height, error)) return false;
+    const size_t pixels = size_t(width) * height;
+    out.width = width;
+    out.height = height;
+    out.channels = aov.kind == RenderAov::BentNormal ? 3 : 1;
+    out.data.assign(pixels * out.channels, 0.0f);
+    if (aov.kind == RenderAov::Shadow) {
+        // width * layers x height: the layer count follows from the size
+        const size_t layers = pixels ? effect.texels.size() / pixels : 0;
+        if (effect.format != rhi::Format::R8_UNORM || layers * pixels != effect.texels.size()) {
+            error = fmt::format("effects.shadow: {} bytes of {} do not make layers of {}x{}", effect.texels.size(),
+                                rhi::formatInfo(effect.format).name, width, height);
+            return false;
+        }
+        if (aov.light >= layers) {
+            error = fmt::format("the last frame has {} shadowed light(s) (shadow = the first, shadowN = light N "
+                                "from 0; lights with castShadows)",
+                                layers);
+            return false;
+        }
+        for (size_t y = 0; y < height; ++y)
+            for (size_t x = 0; x < width; ++x) {
+                const size_t i = y * width + x;
+                if (floatAt(depth, i) != 0.0f)
+                    out.data[i] = effect.texels[y * width * layers + aov.light * width + x] / 255.0f;
+            }
+        return true;
+    }
+    if (aov.kind == RenderAov::Thickness) {
+        if (!checkTarget(&effect, "effects.thickness", rhi::Format::R16_FLOAT, width, height, error)) return false;
+        for (size_t i = 0; i < pixels; ++i) {
+            uint16_t h;
+            std::memcpy(&h, effect.texels.data() + i * 2, 2);
+            if (floatAt(depth, i) != 0.0f) out.data[i] = glm::unpackHalf1x16(h);
+        }
+        return true;
+    }
+    if (!checkTarget(&effect, "effects.ao", rhi::Format::RGBA8_UNORM, width, height, error)) return false;
+    for (size_t i = 0; i < pixels; ++i) {
+        if (floatAt(depth, i) == 0.0f) continue;
+        const uint8_t* t = effect.texels.data() + i * 4;
+        if (aov.kind == RenderAov::Ao) {
+            out.data[i] = t[0] / 255.0f;
+            continue;
+        }
+        const glm::vec3 b = glm::vec3(t[1], t[2], t[3]) / 255.0f * 2.0f - 1.0f;
+        const glm::vec3 n = glm::dot(b, b) > 1e-12f ? glm::normalize(b) : glm::vec3(0.0f);
+        for (int c = 0; c < 3; ++c) out.data[i * 3 + c] = n[c];
+    }
+    return true;
+}
+
+namespace {
+
+bool writePfmOutput(OutputFiles& outputs, const std::string& path, const reference::FloatImage& image,
+                    std::string& error) {
+    return outputs.write(
+        path,
+        [&](const std::string& temp, std::string& why) {
+            std::string pfmError;
+            if (reference::writePfm(temp, image, pfmError)) return true;
+            why = fmt::format("cannot write {}: {}", path, pfmError);
+            return false;
+        },
+        error);
+}
+
+}  // namespace
 
 bool writeAovOutputs(OutputFiles& outputs, render::SceneRenderer& renderer, uint32_t width, uint32_t height,
                      const std::vector<AovOutput>& aovs, std::string& error) {
     if (aovs.empty()) return true;
     bool needDepth = false, needNormal = false, needAux = false;
     for (const AovOutput& a : aovs) {
-        needDepth |= a.kind == RenderAov::Depth || a.kind == RenderAov::Normal;
+        needDepth |= a.kind != RenderAov::Ids && a.kind != RenderAov::Steps;
         needNormal |= a.kind == RenderAov::Normal;
         needAux |= a.kind == RenderAov::Ids || a.kind == RenderAov::Steps;
     }
@@ -200,22 +324,31 @@ bool writeAovOutputs(OutputFiles& outputs, render::SceneRenderer& renderer, uint
     if (!read(needDepth, "gbuffer.depth", depth) || !read(needNormal, "gbuffer.normal", normal) ||
         !read(needAux, "gbuffer.aux", aux))
         return false;
+    std::map<std::string, TargetTexels> effects;  // read back once each
     for (const AovOutput& a : aovs) {
         reference::FloatImage image;
-        if (!convertAov(a.kind, width, height, &depth, &normal, &aux, image, error)) {
-            error = fmt::format("--aov {}: {}", aovName(a.kind), error);
+        bool ok = false;
+        if (isEffectAov(a.kind)) {
+            const char* target = effectTarget(a.kind);
+            auto it = effects.find(target);
+            if (it == effects.end()) {
+                TargetTexels t;
+                std::string why;
+                if (!renderer.readTarget(target, t.texels, t.format, why)) {
+                    error = fmt::format("--aov {}: {}", aovLabel(a), effectHint(a.kind));
+                    return false;
+                }
+                it = effects.emplace(target, std::move(t)).first;
+            }
+            ok = convertEffectAov(a, width, height, depth, it->second, image, error);
+        } else {
+            ok = convertAov(a.kind, width, height, &depth, &normal, &aux, image, error);
+        }
+        if (!ok) {
+            error = fmt::format("--aov {}: {}", aovLabel(a), error);
             return false;
         }
-        const bool ok = outputs.write(
-            a.path,
-            [&](const std::string& temp, std::string& why) {
-                std::string pfmError;
-                if (reference::writePfm(temp, image, pfmError)) return true;
-                why = fmt::format("cannot write {}: {}", a.path, pfmError);
-                return false;
-            },
-            error);
-        if (!ok) return false;
+        if (!writePfmOutput(outputs, a.path, image, error)) return false;
     }
     return true;
 }
