@@ -17,10 +17,14 @@
 //       sdf_scene.glsl (EffectsDesc::trace.fieldSafety).
 //
 //   float sdfSurfaceBias(vec3 p, float pixelSize, uint objectCount);
-//       The start offset (world units) that keeps a ray leaving the surface at p from shadowing
-//       itself: 2 pixel footprints (pixelSize = the pixel's world size at p), and at least 1.5
-//       voxels of the nearest field object (its trilinear surface lies up to a voxel off the
-//       baked one, and the safe distance another interpolation bound below that).
+//       The offset along the surface normal (world units) that keeps a ray leaving the surface at p
+//       from shadowing itself on the surface's own distance error: a quarter pixel footprint
+//       (pixelSize = the pixel's world size at p; analytic surfaces are traced to a small fraction
+//       of that) and at least 1.5 voxels of the nearest field object (its trilinear surface lies up
+//       to a voxel off the baked one, and the safe distance another interpolation bound below
+//       that). Start the ray at p + n * bias with tMin = 2 * pixelSize + bias along the light
+//       direction: the normal offset moves the shadow sideways by bias * tan(angle of incidence),
+//       so it stays small; the start along the ray, which moves nothing, clears the rest.
 //
 //   float sdfDiscVisible(float x);
 //       The visible fraction of a uniform disc of radius 1 cut by a straight edge at signed offset
@@ -36,7 +40,11 @@
 // along the ray (the minimum x) decides the visibility. Only the light's size enters: no tuning
 // constant. Known bias: an occluder whose angular size is close to the light's has a curved edge
 // across the disc, and the half-space covers more of the disc than it does (the estimate is then
-// darker than the exact cap overlap; tests/renderer/sdf_shadow_test.cpp measures it).
+// darker than the exact cap overlap; tests/renderer/sdf_shadow_test.cpp measures it). Inside an
+// occluder the distance is that to the nearest face, not to the silhouette edge seen from the
+// receiver, so an occluder thinner than the cone's cross-section where the ray crosses it lets
+// about half the light through (x >= -thickness / (2 t sin(halfAngle))): thin plates give weak
+// umbras, as in every distance-field cone trace.
 //
 // Culling: an object takes part in a ray only if its bounds box, grown by the cone's radius where
 // the cone could reach it, meets the ray in [tMin, tMax]; up to SDF_CONE_LIST objects are kept in
@@ -152,7 +160,7 @@ float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sin
 }
 
 float sdfSurfaceBias(vec3 p, float pixelSize, uint objectCount) {
-    float bias = 2.0 * pixelSize;
+    float bias = 0.25 * pixelSize;
 #ifdef SDF_FIELDS
     float nearest = 3.0e38;
     float voxel = 0.0;

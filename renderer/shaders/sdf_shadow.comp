@@ -10,10 +10,10 @@
 //     than the sphere's silhouette); the hard setting forces a binary ray. Outside a light's range
 //     the light adds nothing: 1 without a trace. A light entirely below the surface's horizon
 //     (n . l < -sin(halfAngle)) is hidden: 0 without a trace;
-//  3. the cone trace from the surface point lifted off it by sdfSurfaceBias along the normal (2
-//     pixel footprints at the point's depth, at least 1.5 voxels of the nearest field), starting
-//     another bias along the light direction; hard rays stop at a distance below half a pixel
-//     footprint;
+//  3. the cone trace from the surface point lifted off it by sdfSurfaceBias along the normal (a
+//     quarter pixel footprint at the point's depth, at least 1.5 voxels of the nearest field),
+//     starting 2 pixel footprints + that bias along the light direction (sdf_cone.glsl says why the
+//     normal offset stays small); hard rays stop at a distance below half a pixel footprint;
 //  4. the visible fraction into the layer's column block of the R8 strip.
 #version 450
 #pragma penumbra_variants SDF_FIELDS
@@ -76,7 +76,7 @@ float visibility(Light light, vec3 p, vec3 n, float pixelSize) {
     float bias = sdfSurfaceBias(p, pixelSize, shadow.counts.x);
     vec3 origin = p + n * bias;
     float epsilon = max(0.5 * pixelSize, 1e-6 * max(length(p), 1.0));
-    return sdfConeVisibility(origin, l, bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
+    return sdfConeVisibility(origin, l, 2.0 * pixelSize + bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
                              epsilon);
 }
 
