@@ -44,6 +44,7 @@
 #include "renderer/features/scene_upload.h"
 #include "renderer/features/sdf_atlas.h"
 #include "renderer/features/sdf_scene.h"
+#include "renderer/features/sdf_surface.h"
 #include "renderer/features/sdf_trace.h"
 
 namespace penumbra::render {
@@ -127,6 +128,7 @@ struct FrameGather {
     std::vector<const assets::MeshData*> drawMesh;
     std::vector<const GpuMesh*> gpuMeshes;
     std::vector<rhi::TextureHandle> materialTexture;  // per material, albedo frames only
+    std::vector<rhi::TextureHandle> materialNormal;   // per material: normal maps of traced SDF materials
     std::vector<LightSource> lights;
     std::vector<SdfSource> sdfs;  // traced ones, then occluders, each in ascending entity index
     uint32_t tracedSdfs = 0;      // sdfs[0, tracedSdfs) are traced
@@ -264,6 +266,11 @@ struct SceneRenderer::Impl {
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
     float debugDepthRange(const CameraSetup& cam, const FrameGather& g) const;
     std::vector<MeshDraw> importDraws(const FrameGather& g);
+    // Material textures, each imported into this frame's graph once (meshes and sdf_surface share them).
+    std::unordered_map<uint64_t, fg::TextureRef> textureRefs;
+    fg::TextureRef importMaterialTexture(rhi::TextureHandle tex, assets::AssetId id);
+    bool uploadSdfNormalMaps(const assets::AssetManager& assets, FrameGather& g, std::string& error);
+    std::vector<SdfSurfaceMaterial> sdfSurfaceMaterials(const FrameGather& g);
     void finishFrame(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g,
                      uint64_t transientBytes);
 };
@@ -571,6 +578,7 @@ bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, Frame
         }
     }
     if (!uploadFields(g, error)) return false;
+    if (!uploadSdfNormalMaps(assets, g, error)) return false;
     if (!g.albedo) return true;
     g.materialTexture.resize(g.materials.size());
     for (size_t m = 0; m < g.materials.size(); ++m) {
@@ -731,7 +739,6 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
 // Each mesh's buffers and each texture imported once; one MeshDraw per source.
 std::vector<MeshDraw> SceneRenderer::Impl::importDraws(const FrameGather& g) {
     std::unordered_map<const GpuMesh*, std::pair<fg::BufferRef, fg::BufferRef>> meshRefs;
-    std::unordered_map<uint32_t, fg::TextureRef> textureRefs;
     std::vector<MeshDraw> draws;
     draws.reserve(g.sources.size());
     for (size_t i = 0; i < g.sources.size(); ++i) {
@@ -752,21 +759,64 @@ std::vector<MeshDraw> SceneRenderer::Impl::importDraws(const FrameGather& g) {
         d.indices = it->second.second;
         d.indexCount = gm->indexCount;
         d.objectIndex = uint32_t(i);
-        if (g.albedo) {
-            const rhi::TextureHandle tex = g.materialTexture[g.drawMaterial[i]];
-            auto t = textureRefs.find(tex.value);
-            if (t == textureRefs.end()) {
-                const assets::AssetId id = g.materials[g.drawMaterial[i]]->baseColorTexture;
-                const std::string name =
-                    id != 0 ? fmt::format("texture.{:016x}", id) : std::string("texture.white");
-                t = textureRefs.emplace(tex.value, graph.importTexture(name, tex, rhi::Access::ShaderSampled))
-                        .first;
-            }
-            d.baseColor = t->second;
-        }
+        if (g.albedo)
+            d.baseColor = importMaterialTexture(g.materialTexture[g.drawMaterial[i]],
+                                                g.materials[g.drawMaterial[i]]->baseColorTexture);
         draws.push_back(d);
     }
     return draws;
+}
+
+// A material texture (or the white one, id 0) imported once per frame.
+fg::TextureRef SceneRenderer::Impl::importMaterialTexture(rhi::TextureHandle tex, assets::AssetId id) {
+    auto t = textureRefs.find(tex.value);
+    if (t == textureRefs.end()) {
+        const std::string name = id != 0 ? fmt::format("texture.{:016x}", id) : std::string("texture.white");
+        t = textureRefs.emplace(tex.value, graph.importTexture(name, tex, rhi::Access::ShaderSampled)).first;
+    }
+    return t->second;
+}
+
+// The normal maps of the traced SDF objects' materials (meshes do not read normal maps yet); a
+// normal texture that is not loaded is an error, as a base-colour one is.
+bool SceneRenderer::Impl::uploadSdfNormalMaps(const assets::AssetManager& assets, FrameGather& g,
+                                              std::string& error) {
+    g.materialNormal.assign(g.materials.size(), rhi::TextureHandle{});
+    for (uint32_t i = 0; i < g.tracedSdfs; ++i) {
+        const uint32_t m = g.sdfs[i].material;
+        const assets::AssetId id = g.materials[m]->normalTexture;
+        if (id == 0 || g.materialNormal[m]) continue;
+        const assets::TextureData* data = assets.texture(id);
+        if (!data) {
+            error = fmt::format("{} (SdfRenderer): normal texture {:016x} is not loaded",
+                                entityName(g.sdfs[i].entity), id);
+            return false;
+        }
+        const GpuTexture* t = cache.texture(id, *data, error);
+        if (!t) return false;
+        g.materialNormal[m] = t->texture;
+    }
+    return true;
+}
+
+// The materials of traced SDF objects that have a base-colour texture or a normal map, each once,
+// with their textures imported (sdf_surface's input).
+std::vector<SdfSurfaceMaterial> SceneRenderer::Impl::sdfSurfaceMaterials(const FrameGather& g) {
+    std::vector<SdfSurfaceMaterial> out;
+    std::vector<bool> seen(g.materials.size(), false);
+    for (uint32_t i = 0; i < g.tracedSdfs; ++i) {
+        const uint32_t m = g.sdfs[i].material;
+        if (seen[m]) continue;
+        seen[m] = true;
+        SdfSurfaceMaterial sm;
+        sm.material = m;
+        const assets::AssetId base = g.materials[m]->baseColorTexture;
+        if (base != 0 && g.albedo) sm.baseColor = importMaterialTexture(g.materialTexture[m], base);
+        if (g.materialNormal[m])
+            sm.normal = importMaterialTexture(g.materialNormal[m], g.materials[m]->normalTexture);
+        if (sm.baseColor.isValid() || sm.normal.isValid()) out.push_back(sm);
+    }
+    return out;
 }
 
 // Imports the persistent targets, publishes them and orders the feature modules. Returns the bytes
@@ -775,6 +825,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
                                          const FrameGather& g) {
     graph.reset();
     board.clear();
+    textureRefs.clear();
     FrameContext fc{device, graph, gpuCache, board, desc.width, desc.height};
     Output& out = board.add<Output>();
     out.srgbTarget = g.hardwareSrgb;
@@ -816,6 +867,8 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.farPlane = cam.farPlane;
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
         if (g.tracedSdfs > 0) addSdfTrace(fc, trace);  // occluders only: the effects still see them
+        // Textured SDF materials: triplanar base colour and normal maps in object space.
+        if (g.tracedSdfs > 0) addSdfSurface(fc, sdfSurfaceMaterials(g));
         if (g.effects.any()) {
             const EffectsDesc& fx = g.effects;
             Effects& e = board.add<Effects>();

@@ -25,7 +25,9 @@
 //   gbuffer.normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
 //   gbuffer.material  RGBA8_UNORM  r, g = 16-bit material index (low, high byte) / 255, so a frame
 //                                  holds up to 65536 materials, the scene format's limit;
-//                                  b = shadow factor, a = ambient occlusion (1 = unoccluded)
+//                                  b, a = SDF object index + 1 (low, high byte) / 255, 0 for
+//                                  meshes and the background (sdf_surface's object lookup; shadow
+//                                  and AO have their own targets, renderer/features/effects.h)
 // mTec keeps an 8-bit id and an 8-bit SSS thickness in the r, g bytes; here the id takes both, and
 // subsurface thickness (no pass computes it yet) will need its own target when it arrives.
 // plus, outside the 96 bits (as in mTec: "other buffers"):

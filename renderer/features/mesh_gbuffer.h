@@ -1,6 +1,6 @@
 // Feature "mesh_gbuffer": the raster pass "gbuffer_mesh" that draws every visible MeshRenderer
 // into the deferred G-buffer (renderer/scene_renderer.h documents the layout): linear depth,
-// octahedral normal, packed material (16-bit index, shadow 1, AO 1), velocity in pixels and, when
+// octahedral normal, packed material (16-bit index, SDF object 0), velocity in pixels and, when
 // some material of the frame has a base-colour texture, albedo (shader variant ALBEDO).
 // Depth-tested against a transient D32 depth buffer. Reads SceneBuffers and writes the GBuffer
 // published on the blackboard.

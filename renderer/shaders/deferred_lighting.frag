@@ -66,8 +66,8 @@ void main() {
 #endif
         float metallic = m.emissiveMetal.w;
         float roughness = m.params.x;
-        float shadow = packed.b;
-        float ao = packed.a;
+        float shadow = 1.0;  // the effects targets (EFFECTS variant) supply shadow and AO
+        float ao = 1.0;
         vec3 ambientNormal = n;
         float thickness = -1.0;  // < 0: no subsurface term
 #ifdef EFFECTS

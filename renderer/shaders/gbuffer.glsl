@@ -2,7 +2,8 @@
 //   depth     R32_FLOAT    linear view depth (0 = nothing hit)
 //   normal    RG16_FLOAT   world normal, octahedral encoding in [-1, 1]^2
 //   material  RGBA8_UNORM  r, g = 16-bit material index (low byte, high byte) / 255,
-//                          b = shadow, a = AO
+//                          b, a = SDF object index + 1 (low byte, high byte) / 255: 0 for meshes
+//                          and the background (sdf_surface finds an SDF pixel's object by it)
 //   velocity  RG16_FLOAT   pixels moved since the previous frame (current - previous)
 //   albedo    RGBA8_UNORM  optional: base colour, sRGB-encoded by packAlbedo (a UNORM target so the
 //                          compute trace can write it as a storage image)
@@ -25,13 +26,17 @@ vec3 octDecode(vec2 e) {
     return normalize(n);
 }
 
-// The material index (< 65536) is split into two UNORM8 bytes; k / 255 stored in UNORM8 reads back
-// as exactly k / 255, so the round trip is exact.
-vec4 packMaterial(uint index, float shadow, float ao) {
-    return vec4(float(index & 255u) / 255.0, float((index >> 8u) & 255u) / 255.0, shadow, ao);
+// The material index (< 65536) and the SDF object index + 1 (< 65536; 0: not an SDF object) are
+// each split into two UNORM8 bytes; k / 255 stored in UNORM8 reads back as exactly k / 255, so the
+// round trip is exact.
+vec4 packMaterial(uint index, uint sdfObject1) {
+    return vec4(float(index & 255u) / 255.0, float((index >> 8u) & 255u) / 255.0,
+                float(sdfObject1 & 255u) / 255.0, float((sdfObject1 >> 8u) & 255u) / 255.0);
 }
 
 uint unpackMaterialIndex(vec4 m) { return uint(m.r * 255.0 + 0.5) | (uint(m.g * 255.0 + 0.5) << 8u); }
+// The SDF object index + 1 of a pixel (0: a mesh or the background).
+uint unpackMaterialObject(vec4 m) { return uint(m.b * 255.0 + 0.5) | (uint(m.a * 255.0 + 0.5) << 8u); }
 
 // Albedo (linear base colour) <-> the RGBA8_UNORM albedo target with the exact sRGB transfer
 // functions (IEC 61966-2-1), as an RGBA8_SRGB target would store it.

@@ -38,8 +38,8 @@ vec2 clipToPixel(vec4 clip) { return (clip.xy / clip.w * 0.5 + 0.5) * view.viewp
 void main() {
     outDepth = vViewDepth;
     outNormal = octEncode(normalize(vNormal));
-    // Shadow and AO slots start unoccluded (1).
-    outMaterial = packMaterial(vMaterial, 1.0, 1.0);
+    // b,a: no SDF object (0).
+    outMaterial = packMaterial(vMaterial, 0u);
     // A point behind the previous camera has no previous pixel: no motion.
     outVelocity = vPrevClip.w > 1e-6 ? clipToPixel(vClip) - clipToPixel(vPrevClip) : vec2(0.0);
 #ifdef ALBEDO

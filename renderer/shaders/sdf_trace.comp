@@ -269,7 +269,8 @@ void main() {
         uvec4 info = sdfObjects[hitObject].info;
         imageStore(gbufferDepthImage, pixel, vec4(t / dirLength));
         imageStore(gbufferNormalImage, pixel, vec4(octEncode(n), 0.0, 0.0));
-        imageStore(gbufferMaterialImage, pixel, packMaterial(info.z, 1.0, 1.0));
+        // b,a: the object + 1 for sdf_surface (0 past the 16-bit range: such objects keep the factor).
+        imageStore(gbufferMaterialImage, pixel, packMaterial(info.z, hitObject < 65535u ? hitObject + 1u : 0u));
         vec3 local = sdfToLocal(hitObject, p);
         vec4 prevClip = view.prevViewProj * (sdfObjects[hitObject].prevModel * vec4(local, 1.0));
         vec4 clip = view.viewProj * vec4(p, 1.0);
@@ -285,7 +286,7 @@ void main() {
         // Nothing else wrote this pixel this frame: the G-buffer's "nothing hit" values.
         imageStore(gbufferDepthImage, pixel, vec4(0.0));
         imageStore(gbufferNormalImage, pixel, vec4(0.0));
-        imageStore(gbufferMaterialImage, pixel, vec4(0.0, 0.0, 1.0, 1.0));
+        imageStore(gbufferMaterialImage, pixel, vec4(0.0));  // material 0, no SDF object
         imageStore(gbufferVelocityImage, pixel, vec4(0.0));
 #ifdef ALBEDO
         imageStore(gbufferAlbedoImage, pixel, vec4(0.0));

@@ -420,8 +420,8 @@ TEST_P(SceneRendererTest, MaterialIndicesAndBackground) {
         EXPECT_NEAR(depth[i], 3.0f, 3e-4f);
         EXPECT_EQ(int(mat[i * 4 + 0]), probe.index) << "at (" << probe.p.x << ", " << probe.p.y << ")";
         EXPECT_EQ(int(mat[i * 4 + 1]), 0) << "index high byte";
-        EXPECT_EQ(int(mat[i * 4 + 2]), 255) << "shadow slot";
-        EXPECT_EQ(int(mat[i * 4 + 3]), 255) << "AO slot";
+        EXPECT_EQ(int(mat[i * 4 + 2]), 0) << "SDF object slot (0: a mesh), low byte";
+        EXPECT_EQ(int(mat[i * 4 + 3]), 0) << "SDF object slot, high byte";
     }
     // Background (bottom corners): nothing hit -> linear depth exactly 0.
     EXPECT_EQ(depth[size_t(kH - 1) * kW + 0], 0.0f);
@@ -812,8 +812,8 @@ TEST_P(SceneRendererTest, ThreeHundredMaterialsInOneFrame) {
         const int index = int(mat[at]) | int(mat[at + 1]) << 8;
         if (index != i) ++wrongIndex;
         EXPECT_EQ(index, i) << "G-buffer index at quad " << i;
-        EXPECT_EQ(int(mat[at + 2]), 255) << "shadow slot";
-        EXPECT_EQ(int(mat[at + 3]), 255) << "AO slot";
+        EXPECT_EQ(int(mat[at + 2]), 0) << "SDF object slot (0: a mesh), low byte";
+        EXPECT_EQ(int(mat[at + 3]), 0) << "SDF object slot, high byte";
         const std::array<uint8_t, 3> expected =
             ref::displayEncode(colours[size_t(i)], d.settings.exposure, d.settings.toneMapper);
         const int diff = maxChannelDiff(img.at(x, y), expected);
