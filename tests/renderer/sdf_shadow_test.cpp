@@ -293,6 +293,13 @@ TEST_P(SdfShadow, LargeLightErrorCurveIsReported) {
     EXPECT_GE(res.penumbraPixels, 200u) << "the penumbra covers a measurable band of pixels";
 }
 
+// The default half resolution through effects_upsample: the same comparison, printed for the docs
+// (the upsampler's accuracy is effects_upsample's criterion; here only that a penumbra is measured).
+TEST_P(SdfShadow, SphereLightAtHalfResolutionIsReported) {
+    const CapResult res = compareCapCase(dev(), kAcceptanceCase, 0.5f, false);
+    EXPECT_GE(res.penumbraPixels, 200u) << "the penumbra covers a measurable band of pixels";
+}
+
 // ---- 2. hard shadows ----------------------------------------------------------------------------------
 
 struct HardResult {
