@@ -6,6 +6,8 @@
 //   sdf_upload     (transfer)  the frame's SDF objects and shape-program records
 //   sdf_trace      (compute)   sphere tracing of the SdfRenderer entities into the same G-buffer,
 //                              bounded by the mesh depth (hybrid)
+//   sdf_surface    (compute)   textured SDF materials: triplanar albedo and normal maps in object
+//                              space, one dispatch per material (renderer/features/sdf_surface.h)
 //   effects        (compute)   sdf_shadow, sdf_ao, sdf_thickness, sdf_reflection, effects_upsample
 //                              (renderer/features/effects.h: each only when the frame needs it)
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
@@ -90,6 +92,7 @@ struct FrameStats {
     MemoryReport memory;
     uint32_t drawCalls = 0;
     uint32_t sdfObjects = 0;  // SdfRenderer entities traced
+    uint32_t sdfOccluders = 0;  // occluderOnly SdfRenderers (mesh fields seen by shadows and AO only)
     AtlasReport atlas;
     EffectsReport effects;
     uint64_t triangles = 0;
@@ -103,7 +106,6 @@ struct FrameDesc {
     ecs::Entity camera = ecs::kNullEntity;  // must have Camera + Transform
     scene::RenderSettings settings;
     // Optional external colour target (RGBA8_UNORM, or RGBA8_SRGB which encodes in hardware; e.g. a
-    uint32_t sdfOccluders = 0;  // occluderOnly SdfRenderers (mesh fields seen by shadows and AO only)
     // window backbuffer) and the access state
     // it is in; the output is written there instead of the renderer's own texture and left in
     // `targetFinalAccess`.
