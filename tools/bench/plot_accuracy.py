@@ -3,7 +3,9 @@
 
     python3 tools/bench/plot_accuracy.py DIR/accuracy.csv -o DIR [--metrics a,b,...] [--dpi 72]
 
-writes DIR/<pass>_<metric>.png for every pass in the CSV and every metric: one panel per scene (rows)
+writes DIR/<pass>_<metric>.png for every pass in the CSV and every metric of that pass (sdf_trace: the
+depth, silhouette, id and normal columns; sdf_shadow and sdf_ao: the effect_* columns, the shadow
+pass's "all lights" rows only): one panel per scene (rows)
 and backend (columns), x = the pass's median GPU ms, y = the metric, one colour per swept setting
 (its value written next to the point, the medium preset as a star), and the Pareto front (no other
 setting is both faster and more accurate) joined by a black step line and ringed. Needs matplotlib
@@ -29,7 +31,15 @@ METRICS = {
     "normal_mean_deg": ("normal: mean angle error (degrees)", False),
     "normal_p99_deg": ("normal: p99 angle error (degrees)", False),
     "normal_max_deg": ("normal: max angle error (degrees)", False),
+    # sdf_shadow (visibility of the shadowed lights, all together) and sdf_ao (AO), values in [0, 1]
+    "effect_mean": ("mean |error|", False),
+    "effect_p99": ("p99 |error|", False),
+    "effect_max": ("max |error|", False),
+    "effect_rmse": ("RMSE", False),
+    "effect_psnr_db": ("PSNR (dB)", True),
+    "effect_ssim": ("SSIM", True),
 }
+EFFECT_NAMES = {"sdf_shadow": "shadow visibility", "sdf_ao": "AO"}
 SETTING_COLOURS = {
     "quality": "#000000",
     "maxSteps": "#1f77b4",
@@ -38,7 +48,17 @@ SETTING_COLOURS = {
     "fieldSafety": "#9467bd",
     "refineSteps": "#ff7f0e",
     "bakeResolution": "#8c564b",
+    "resolutionScale": "#1f77b4",
+    "hard": "#d62728",
+    "five-tap": "#2ca02c",
+    "multi-ray": "#9467bd",
+    "cones": "#ff7f0e",
 }
+
+
+def metric_of_pass(pass_name, metric):
+    """The effect passes have the effect_* columns, the trace the others."""
+    return metric.startswith("effect_") == (pass_name != "sdf_trace")
 
 
 def number(text):
@@ -90,10 +110,11 @@ def main():
         )
 
     with open(args.csv, newline="") as f:
-        rows = list(csv.DictReader(f))
+        # per-light shadow rows repeat their setting's time: the plots show the "all lights" rows
+        rows = [r for r in csv.DictReader(f) if r.get("light", "") in ("", "all")]
     if not rows:
         sys.exit("plot_accuracy.py: %s has no rows" % args.csv)
-    metrics = [m for m in args.metrics.split(",") if m] or [m for m in METRICS if m != "depth_psnr_db"]
+    metrics = [m for m in args.metrics.split(",") if m] or [m for m in METRICS if "psnr" not in m]
     for m in metrics:
         if m not in rows[0]:
             sys.exit("plot_accuracy.py: %s has no column '%s'" % (args.csv, m))
@@ -112,7 +133,11 @@ def main():
         scenes = ordered("scene", pass_rows)
         backends = ordered("backend", pass_rows)
         for metric in metrics:
+            if not metric_of_pass(pass_name, metric):
+                continue
             label, higher = METRICS.get(metric, (metric, False))
+            if pass_name in EFFECT_NAMES:
+                label = "%s: %s" % (EFFECT_NAMES[pass_name], label)
             width = max(7.0, 4.4 * len(backends))
             height = 3.1 * len(scenes) + 0.7  # the title and the legend take 0.7 in at the top
             fig, axes = plt.subplots(len(scenes), len(backends), figsize=(width, height), squeeze=False)
@@ -161,7 +186,7 @@ def main():
                     if xs and max(xs) / min(xs) > 10:
                         ax.set_xscale("log")
                     if si == len(scenes) - 1:
-                        ax.set_xlabel("%s GPU ms (median)" % pass_name, fontsize=8)
+                        ax.set_xlabel("%s GPU ms (median)" % (pass_name + (" + effects_upsample" if pass_name in EFFECT_NAMES else "")), fontsize=8)
                     if bi == 0:
                         ax.set_ylabel(label, fontsize=7)
             handles, labels = [], []

@@ -25,6 +25,7 @@
 #include <glm/vec3.hpp>
 
 #include "aov_output.h"
+#include "bench_accuracy_effects.h"
 #include "cli_common.h"
 #include "engine/core/log.h"
 #include "engine/core/output_file.h"
@@ -37,29 +38,58 @@
 #include "renderer/renderer.h"
 
 namespace penumbra::cli {
+namespace accuracy {
+
+std::string num(double v) {
+    if (std::isnan(v)) return {};
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    return fmt::format("{:.6g}", v);
+}
+
+// Rows (indices) on the Pareto front of (gpu ms, metric), lower is better for both: no other row
+// is at least as good in both and better in one.
+std::vector<bool> paretoFront(const std::vector<const Row*>& rows, size_t metric) {
+    std::vector<bool> front(rows.size(), false);
+    for (size_t i = 0; i < rows.size(); ++i) {
+        const double t = rows[i]->gpuMedian, e = rows[i]->metrics[metric];
+        if (!std::isfinite(t) || std::isnan(e)) continue;
+        bool dominated = false;
+        for (size_t j = 0; j < rows.size() && !dominated; ++j) {
+            if (j == i) continue;
+            const double tj = rows[j]->gpuMedian, ej = rows[j]->metrics[metric];
+            if (!std::isfinite(tj) || std::isnan(ej)) continue;
+            dominated = tj <= t && ej <= e && (tj < t || ej < e);
+        }
+        front[i] = !dominated;
+    }
+    return front;
+}
+
+std::string sig(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : std::string("–"); }
+std::string msText(double v) {
+    if (!std::isfinite(v)) return "–";
+    return v >= 100.0  ? fmt::format("{:.0f}", v)
+           : v >= 10.0 ? fmt::format("{:.1f}", v)
+                       : fmt::format("{:.2f}", v);
+}
+
+}  // namespace accuracy
+
 namespace {
 
 namespace fs = std::filesystem;
 
 constexpr const char* kCommand = "bench accuracy";
-constexpr const char* kTracePass = "sdf_trace";  // the pass measured today (shadows, AO, ... add rows later)
+using namespace accuracy;                        // Row, the metric columns, the pass names
 constexpr uint32_t kMediumBakeResolution = 128;  // sdf::automaticResolution at BakeQuality::Medium
 
-// Column indices into Row::metrics (the order of accuracyMetrics()).
-enum Metric : size_t {
-    kDepthRelMean,
-    kDepthRelP99,
-    kDepthRelMax,
-    kDepthRelRmse,
-    kDepthPsnr,
-    kDepthSsim,
-    kSilhouette,
-    kIdMismatch,
-    kNormalMean,
-    kNormalP99,
-    kNormalMax,
-    kMetricCount
-};
+// The column of a metric name of accuracyMetrics() (kMetricCount: unknown).
+size_t metricIndex(const std::string& name) {
+    const std::vector<AccuracyMetricInfo>& all = accuracyMetrics();
+    for (size_t i = 0; i < all.size(); ++i)
+        if (name == all[i].name) return i;
+    return kMetricCount;
+}
 
 double minimum(const std::vector<double>& v) {
     double m = std::nan("");
@@ -79,12 +109,6 @@ std::string csvField(const std::string& s) {
     std::string q = "\"";
     for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
     return q + "\"";
-}
-
-std::string num(double v) {
-    if (std::isnan(v)) return {};
-    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
-    return fmt::format("{:.6g}", v);
 }
 
 // ---- the sweep -------------------------------------------------------------------------------
@@ -171,18 +195,6 @@ bool sameTrace(const scene::TraceSettings& a, const scene::TraceSettings& b) {
 }
 
 // ---- results ---------------------------------------------------------------------------------
-
-struct Row {
-    std::string scene, pass, backend, device, setting, value;
-    bool baseline = false;  // the setting is the medium preset itself
-    double gpuMedian = std::nan(""), frameMedian = std::nan(""), gpuMin = std::nan(""),
-           frameMin = std::nan("");
-    double metrics[kMetricCount];
-    double meanSteps = std::nan("");
-    size_t pixelsReference = 0, pixelsTest = 0, pixelsBoth = 0;
-    uint32_t frames = 0;
-    Row() { std::fill(std::begin(metrics), std::end(metrics), std::nan("")); }
-};
 
 struct SceneInfo {
     std::string path;
@@ -573,44 +585,20 @@ std::string csvReport(const std::vector<Row>& rows) {
     for (const AccuracyMetricInfo& m : accuracyMetrics()) csv += std::string(",") + m.name;
     csv +=
         ",gpu_ms_min,frame_ms_min,mean_steps,pixels_reference,pixels_test,pixels_both,frames,baseline,"
-        "device\n";
+        "device,light,ref_samples,ref_std_error_mean,ref_std_error_max\n";
     for (const Row& r : rows) {
         csv += fmt::format("{},{},{},{},{},{},{}", csvField(r.scene), r.pass, r.backend, r.setting, r.value,
                            num(r.gpuMedian), num(r.frameMedian));
         for (double m : r.metrics) csv += "," + num(m);
-        csv += fmt::format(",{},{},{},{},{},{},{},{},{}\n", num(r.gpuMin), num(r.frameMin), num(r.meanSteps),
-                           r.pixelsReference, r.pixelsTest, r.pixelsBoth, r.frames, r.baseline ? 1 : 0,
-                           csvField(r.device));
+        csv += fmt::format(",{},{},{},{},{},{},{},{},{},{},{},{},{}\n", num(r.gpuMin), num(r.frameMin),
+                           num(r.meanSteps), r.pixelsReference, r.pixelsTest, r.pixelsBoth, r.frames,
+                           r.baseline ? 1 : 0, csvField(r.device), csvField(r.light),
+                           r.refSamples ? std::to_string(r.refSamples) : std::string(), num(r.refStdMean),
+                           num(r.refStdMax));
     }
     return csv;
 }
 
-// Rows (indices) on the Pareto front of (gpu ms, metric), lower is better for both: no other row
-// is at least as good in both and better in one.
-std::vector<bool> paretoFront(const std::vector<const Row*>& rows, size_t metric) {
-    std::vector<bool> front(rows.size(), false);
-    for (size_t i = 0; i < rows.size(); ++i) {
-        const double t = rows[i]->gpuMedian, e = rows[i]->metrics[metric];
-        if (!std::isfinite(t) || std::isnan(e)) continue;
-        bool dominated = false;
-        for (size_t j = 0; j < rows.size() && !dominated; ++j) {
-            if (j == i) continue;
-            const double tj = rows[j]->gpuMedian, ej = rows[j]->metrics[metric];
-            if (!std::isfinite(tj) || std::isnan(ej)) continue;
-            dominated = tj <= t && ej <= e && (tj < t || ej < e);
-        }
-        front[i] = !dominated;
-    }
-    return front;
-}
-
-std::string sig(double v) { return std::isfinite(v) ? fmt::format("{:.3g}", v) : std::string("–"); }
-std::string msText(double v) {
-    if (!std::isfinite(v)) return "–";
-    return v >= 100.0  ? fmt::format("{:.0f}", v)
-           : v >= 10.0 ? fmt::format("{:.1f}", v)
-                       : fmt::format("{:.2f}", v);
-}
 std::string percent(double v) {
     return std::isfinite(v) ? fmt::format("{:.2f}", 100.0 * v) : std::string("–");
 }
@@ -621,11 +609,16 @@ std::string markdownReport(const BenchAccuracyOptions& opt, const std::vector<Ro
     std::string md;
     std::string scenesArg;
     for (const std::string& s : opt.scenes) scenesArg += (scenesArg.empty() ? "" : ",") + s;
+    std::string passesArg;
+    for (const std::string& p : opt.passes) passesArg += (passesArg.empty() ? "" : ",") + p;
     md += fmt::format(
-        "`penumbra bench accuracy --scenes {} --backend {} --width {} --height {} --frames {} --warmup {} "
-        "--sweep {}`, {}. Machine: {}, {} hardware threads; load average (1 / 5 / 15 min) before {}, "
-        "after {}.\n\n",
-        scenesArg, opt.backend, opt.width, opt.height, opt.frames, opt.warmup, opt.sweep, date, cpuModel(),
+        "`penumbra bench accuracy --scenes {} --backend {} --passes {} --width {} --height {} --effect-width "
+        "{} "
+        "--effect-height {} --effect-error {} --frames {} --warmup {} --sweep {}`, {}. Machine: {}, {} "
+        "hardware "
+        "threads; load average (1 / 5 / 15 min) before {}, after {}.\n\n",
+        scenesArg, opt.backend, passesArg, opt.width, opt.height, opt.effectWidth, opt.effectHeight,
+        opt.effectError, opt.frames, opt.warmup, opt.sweep, date, cpuModel(),
         std::thread::hardware_concurrency(), loadBefore, loadAfter);
     std::vector<std::string> devices;
     for (const Row& r : rows) {
@@ -633,6 +626,7 @@ std::string markdownReport(const BenchAccuracyOptions& opt, const std::vector<Ro
         if (std::find(devices.begin(), devices.end(), d) == devices.end()) devices.push_back(d);
     }
     for (const std::string& d : devices) md += "- " + d + "\n";
+    if (!opt.wantTrace()) return md;
     md += fmt::format(
         "\nPareto-front settings of the {} pass (time: median GPU ms over {} frames; front: D = depth "
         "rel. p99, S = silhouette mismatch, N = normal mean angle; ids % = pixels hit in both whose entity "
@@ -825,14 +819,42 @@ bool drawPlots(const BenchAccuracyOptions& opt, const std::string& csv, const st
     return true;
 }
 
+// The sdf_trace rows of one loaded scene: the exact reference, then the sweep on each backend.
+// Returns the exit code (0 ok; errors are logged).
+int runTraceRows(const BenchAccuracyOptions& opt, Engine& engine, ecs::Entity camera,
+                 const std::vector<rhi::Backend>& backends, std::vector<Row>& rows, SceneInfo& info) {
+    std::string error;
+    const std::string& path = info.path;
+    fmt::print(stderr, "[{}] reference {}x{} (depth, normal, ids)\n", path, opt.width, opt.height);
+    Reference ref;
+    if (!renderReference(opt, engine, camera, ref, info, error)) {
+        log::error("{}: {}: reference: {}", kCommand, path, error);
+        return 1;
+    }
+    fmt::print(stderr, "[{}] reference: {} pixels hit, {:.1f} s, {} unconverged rays\n", path,
+               info.referencePixels, info.referenceSeconds, info.unconverged);
+    if (info.unconverged)
+        log::warn("{}: {}: {} reference rays did not converge (counted as misses)", kCommand, path,
+                  info.unconverged);
+
+    Rebaker rebaker(engine);
+    info.meshBakes = uint32_t(rebaker.size());
+    const std::vector<Setting> sweep = buildSweep(opt.sweep, !rebaker.empty());
+    for (rhi::Backend b : backends)
+        if (const int rc = runBackend(opt, engine, b, ref, sweep, rebaker, path, rows); rc != 0) return rc;
+    return 0;
+}
+
 }  // namespace
 
 const std::vector<AccuracyMetricInfo>& accuracyMetrics() {
     static const std::vector<AccuracyMetricInfo> metrics = {
-        {"depth_rel_mean", false},      {"depth_rel_p99", false}, {"depth_rel_max", false},
-        {"depth_rel_rmse", false},      {"depth_psnr_db", true},  {"depth_ssim", true},
-        {"silhouette_mismatch", false}, {"id_mismatch", false},   {"normal_mean_deg", false},
-        {"normal_p99_deg", false},      {"normal_max_deg", false}};
+        {"depth_rel_mean", false},      {"depth_rel_p99", false},  {"depth_rel_max", false},
+        {"depth_rel_rmse", false},      {"depth_psnr_db", true},   {"depth_ssim", true},
+        {"silhouette_mismatch", false}, {"id_mismatch", false},    {"normal_mean_deg", false},
+        {"normal_p99_deg", false},      {"normal_max_deg", false}, {"effect_mean", false},
+        {"effect_p99", false},          {"effect_max", false},     {"effect_rmse", false},
+        {"effect_psnr_db", true},       {"effect_ssim", true}};
     return metrics;
 }
 
@@ -869,6 +891,23 @@ CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
                     "overRelaxation 1..1.5, fieldSafety 0/0.5/1, refineSteps 0..4, bakeResolution 32..256 "
                     "(scenes with mesh bakes); quick: one value of each besides medium")
         ->check(CLI::IsMember({"default", "quick"}))
+        ->capture_default_str();
+    cmd->add_option("--passes", opt.passes,
+                    "Comma-separated rows to measure: trace (sdf_trace), shadow (sdf_shadow, scenes with "
+                    "shadowed lights), ao (sdf_ao)")
+        ->delimiter(',')
+        ->check(CLI::IsMember({"trace", "shadow", "ao"}))
+        ->capture_default_str();
+    addSizeOption(cmd, "--effect-width", opt.effectWidth,
+                  "Image width of the shadow and AO rows (their Monte Carlo reference is slow)")
+        ->capture_default_str();
+    addSizeOption(cmd, "--effect-height", opt.effectHeight, "Image height of the shadow and AO rows")
+        ->capture_default_str();
+    cmd->add_option(
+           "--effect-error", opt.effectError,
+           "Size of the shadow and AO errors to resolve: the reference takes the smallest k*k samples "
+           "whose standard-error bound is at most a third of it (0.05 -> 900)")
+        ->check(CLI::Range(0.001, 1.0))
         ->capture_default_str();
     cmd->add_option("--threads", opt.threads, "Reference renderer threads (0: one per CPU)")
         ->capture_default_str();
@@ -916,18 +955,19 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
     std::string python, plotScript, plotsSkipped;
     if (!findPlotter(opt, python, plotScript, plotsSkipped)) return 1;
     const bool plots = plotsSkipped.empty();
-    std::vector<std::string> plotMetrics;
+    std::vector<std::string> plotMetrics;  // the trace's, then the effect passes' (not PSNR: as RMSE)
     for (const AccuracyMetricInfo& m : accuracyMetrics())
-        if (std::string(m.name) != "depth_psnr_db") plotMetrics.push_back(m.name);  // same order as rmse
+        if (std::string(m.name).find("psnr") == std::string::npos) plotMetrics.push_back(m.name);
 
     const std::string csvPath = opt.outputDir + "/accuracy.csv", mdPath = opt.outputDir + "/accuracy.md";
     std::vector<std::string> outputPaths = {csvPath, mdPath};
     std::vector<std::string> plotNames;
-    if (plots)
-        for (const std::string& m : plotMetrics) {
-            plotNames.push_back(fmt::format("{}_{}.png", kTracePass, m));
-            outputPaths.push_back(opt.outputDir + "/" + plotNames.back());
-        }
+    if (plots && opt.wantTrace())
+        for (size_t m = 0; m < plotMetrics.size(); ++m)
+            if (!isEffectMetric(metricIndex(plotMetrics[m]))) {
+                plotNames.push_back(fmt::format("{}_{}.png", kTracePass, plotMetrics[m]));
+                outputPaths.push_back(opt.outputDir + "/" + plotNames.back());
+            }
     OutputFiles outputs;
     if (!prepareOutputs(outputs, outputPaths, kCommand)) return 1;
     if (!plots) fmt::print(stderr, "{}: plots will be skipped: {}\n", kCommand, plotsSkipped);
@@ -938,6 +978,7 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
     const auto start = std::chrono::steady_clock::now();
     std::vector<Row> rows;
     std::vector<SceneInfo> scenes;
+    std::vector<accuracy::EffectSceneInfo> effectScenes;
     for (size_t sceneIndex = 0; sceneIndex < opt.scenes.size(); ++sceneIndex) {
         const std::string& path = opt.scenes[sceneIndex];
         fmt::print(stderr, "[{}] scene {}/{}: loading\n", path, sceneIndex + 1, opt.scenes.size());
@@ -969,32 +1010,36 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
                                           : fmt::format("the scene has no camera named '{}'", cameraName));
             return 1;
         }
-        fmt::print(stderr, "[{}] reference {}x{} (depth, normal, ids)\n", path, opt.width, opt.height);
-        Reference ref;
-        if (!renderReference(opt, *engine, camera, ref, info, error)) {
-            log::error("{}: {}: reference: {}", kCommand, path, error);
-            return 1;
-        }
-        fmt::print(stderr, "[{}] reference: {} pixels hit, {:.1f} s, {} unconverged rays\n", path,
-                   info.referencePixels, info.referenceSeconds, info.unconverged);
-        if (info.unconverged)
-            log::warn("{}: {}: {} reference rays did not converge (counted as misses)", kCommand, path,
-                      info.unconverged);
-
-        Rebaker rebaker(*engine);
-        info.meshBakes = uint32_t(rebaker.size());
-        const std::vector<Setting> sweep = buildSweep(opt.sweep, !rebaker.empty());
-        for (rhi::Backend b : backends)
-            if (const int rc = runBackend(opt, *engine, b, ref, sweep, rebaker, path, rows); rc != 0)
+        if (opt.wantTrace())
+            if (const int rc = runTraceRows(opt, *engine, camera, backends, rows, info); rc != 0) return rc;
+        if (opt.wantShadow() || opt.wantAo()) {
+            accuracy::EffectSceneInfo effectInfo;
+            if (const int rc = runEffectRows(opt, *engine, backends, path, rows, effectInfo); rc != 0)
                 return rc;
-        scenes.push_back(info);
+            effectScenes.push_back(effectInfo);
+        }
+        if (opt.wantTrace()) scenes.push_back(info);
     }
     const std::string loadAfter = loadAverage();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
+    // The effect passes' plots, for the passes that have rows (known only now; the folder was
+    // checked before the work with the CSV).
+    for (const char* pass : {kShadowPass, kAoPass}) {
+        const bool any = std::any_of(rows.begin(), rows.end(), [&](const Row& r) { return r.pass == pass; });
+        for (size_t m = 0; plots && any && m < plotMetrics.size(); ++m)
+            if (isEffectMetric(metricIndex(plotMetrics[m]))) {
+                plotNames.push_back(fmt::format("{}_{}.png", pass, plotMetrics[m]));
+                if (!outputs.add(opt.outputDir + "/" + plotNames.back(), error)) {
+                    log::error("{}: {}", kCommand, error);
+                    return 1;
+                }
+            }
+    }
     const std::string csv = csvReport(rows);
-    if (!outputs.writeText(csvPath, csv, error) ||
-        !outputs.writeText(mdPath, markdownReport(opt, rows, scenes, date, loadBefore, loadAfter), error)) {
+    const std::string md = markdownReport(opt, rows, scenes, date, loadBefore, loadAfter) +
+                           (effectScenes.empty() ? std::string() : effectsMarkdown(opt, rows, effectScenes));
+    if (!outputs.writeText(csvPath, csv, error) || !outputs.writeText(mdPath, md, error)) {
         log::error("{}: {}", kCommand, error);
         return 1;
     }
@@ -1004,9 +1049,9 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
         return 1;
     }
     fmt::print("penumbra bench accuracy: {} scene(s), {} backend(s), {} rows in {:.0f} s; wrote {}, {}",
-               scenes.size(), backends.size(), rows.size(), seconds, csvPath, mdPath);
+               opt.scenes.size(), backends.size(), rows.size(), seconds, csvPath, mdPath);
     if (plots)
-        fmt::print(" and {} plot(s) {}/{}_*.png\n", plotNames.size(), opt.outputDir, kTracePass);
+        fmt::print(" and {} plot(s) {}/<pass>_<metric>.png\n", plotNames.size(), opt.outputDir);
     else
         fmt::print("\nplots skipped: {}\n", plotsSkipped);
     return 0;
