@@ -1,8 +1,73 @@
+// Feature "sdf_thickness" (renderer/features/sdf_thickness.h).
 #include "renderer/features/sdf_thickness.h"
+
+#include <shaders/sdf_thickness.h>
+
+#include "renderer/core/shader_params.h"
+#include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
 
-// Placeholder until the module lands (adds no pass).
-void addSdfThickness(FrameContext&, const EffectsDesc&) {}
+void addSdfThickness(FrameContext& fc, const EffectsDesc& desc) {
+    namespace program = shaders::sdf_thickness;
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        GBuffer gb;
+        fg::TextureRef thickness;
+    };
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const bool fields = sdfScene.atlas.isValid();
+    const rhi::ShaderDesc& cs =
+        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    rhi::SamplerDesc nearest;  // G-buffer texel fetches
+    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
+    const rhi::SamplerHandle point = fc.cache.sampler(nearest);
+    rhi::SamplerDesc linear;  // trilinear field sampling, clamped
+    linear.debugName = "sdf.atlas";
+    const rhi::SamplerHandle fieldSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const program::PushConstants push{
+        glm::uvec4(sdfScene.objectCount, kThicknessSteps, 0u, 0u),
+        glm::vec4(desc.trace.hitEpsilon, desc.footprint, desc.trace.fieldSafety, kThicknessCapRadii)};
+    const uint32_t width = fc.width, height = fc.height;
+    fc.graph.addPass<Data>(
+        "sdf_thickness", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.gb = *fc.board.find<GBuffer>();
+            d.thickness = b.write(fc.board.find<Effects>()->thickness, rhi::Access::ShaderWrite);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            b.read(d.scene.materials, rhi::Access::ShaderRead);
+            b.read(d.sdf.objects, rhi::Access::ShaderRead);
+            b.read(d.sdf.records, rhi::Access::ShaderRead);
+            if (fields) {
+                b.read(d.sdf.fields, rhi::Access::ShaderRead);
+                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
+            }
+            for (fg::TextureRef t : {d.gb.depth, d.gb.normal, d.gb.material})
+                b.read(t, rhi::Access::ShaderSampled);
+        },
+        [&cache = fc.cache, &cs, pipeline, point, fieldSampler, push, width, height, fields](
+            const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("Materials", ctx.buffer(d.scene.materials))
+                .set("SdfObjects", ctx.buffer(d.sdf.objects))
+                .set("ShapeRecords", ctx.buffer(d.sdf.records))
+                .set("gbufferDepth", ctx.texture(d.gb.depth), point)
+                .set("gbufferNormal", ctx.texture(d.gb.normal), point)
+                .set("gbufferMaterial", ctx.texture(d.gb.material), point)
+                .setStorage("thicknessImage", ctx.texture(d.thickness));
+            if (fields)
+                params.set("SdfFields", ctx.buffer(d.sdf.fields))
+                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), fieldSampler);
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            dispatchOver(ctx.cmd, cs, width, height);
+        });
+}
 
 }  // namespace penumbra::render
