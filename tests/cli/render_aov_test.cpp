@@ -62,7 +62,7 @@ TEST(AovList, RefusesBadItems) {
         const char* message;
     };
     const Case cases[] = {
-        {"colour=c.pfm", "unknown AOV 'colour' (depth, normal, ids, steps)"},
+        {"colour=c.pfm", "unknown AOV 'colour' (depth, normal, ids, steps, ao, shadow, shadowN, bentnormal, thickness)"},
         {"depth=a.pfm,depth=b.pfm", "AOV 'depth' is listed twice"},
         {"depth=d.png", "must end in .pfm"},
         {"depth=d", "must end in .pfm"},
