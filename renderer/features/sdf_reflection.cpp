@@ -28,7 +28,8 @@ void addSdfReflection(FrameContext& fc, const EffectsDesc& desc) {
     linear.debugName = "sdf.atlas";
     const rhi::SamplerHandle fieldSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
     const scene::TraceSettings& t = desc.trace;
-    const program::PushConstants push{glm::uvec4(sdfScene.objectCount, desc.reflections.maxSteps, 0u, 0u),
+    const program::PushConstants push{glm::uvec4(sdfScene.objectCount, desc.reflections.maxSteps,
+                                                 desc.shadows.hard ? 1u : 0u, desc.shadows.maxSteps),
                                       glm::vec4(t.hitEpsilon, t.normalEpsilon, t.fieldSafety, desc.footprint),
                                       glm::vec4(desc.farPlane, desc.reflections.roughnessCutoff, 0.0f, 0.0f)};
     const uint32_t width = fc.width, height = fc.height;

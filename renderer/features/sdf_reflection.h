@@ -8,15 +8,17 @@
 //   a   = fade = 1 - smoothstep(0, roughnessCutoff, roughness)   (0 at the cut-off; 0: no reflection)
 // which the lighting pass adds to the pixel's radiance.
 //
-// Settings: ReflectionSettings::maxSteps (resolved by quality: 32/64/128/1024), the frame's trace
+// Settings: ReflectionSettings::maxSteps (resolved by quality: 32/64/128/1024), ShadowSettings (hard,
+// maxSteps) for the shadows at the hit, the frame's trace
 // hitEpsilon / normalEpsilon / fieldSafety (scene::TraceSettings), rays up to the far plane.
 //
 // What a reflection shows and what it lacks:
 // - SDF objects and occluder-only mesh fields (--mesh-sdf occlusion): meshes are reflected through
 //   their baked fields. Rasterized-only meshes (no SDF) are absent from mirror reflections.
 // - The hit's material is its constant baseColor / metallic / roughness / emissive: no textures.
-// - Reflected hits are lit unshadowed (no shadow or AO at the hit) until the cone-traced
-//   visibility helper (renderer/shaders/sdf_cone.glsl) lands; a miss sees the background radiance.
+// - Reflected hits are shadowed for the lights the frame shadows, by the shadow pass's cone trace
+//   (renderer/shaders/sdf_cone.glsl; ShadowSettings hard / maxSteps), per reflected pixel at full
+//   resolution; no AO at the hit; a miss sees the background radiance.
 // - One sharp ray per pixel even for rough materials (the fade hides the error as roughness grows);
 //   the lighting still adds its ambient term, so reflective pixels count the ambient's specular part
 //   twice (small with the usual ambient levels).

@@ -15,7 +15,8 @@
 //     goes on (silhouettes are not widened by eps, as in the primary trace);
 //  5. at a hit: the gradient normal and the hit object's material (baseColor, no textures), shaded
 //     with the scene's lights by the lighting pass's BRDF (brdf.glsl) plus the sky/ground ambient
-//     and emissive; lights are unshadowed in the reflection (no shadow helper yet); a miss sees the
+//     and emissive; each light the frame shadows is shadowed at the hit by the shadow pass's cone
+//     trace (sdf_cone.glsl, the same light sizes, hard setting and step limit); a miss sees the
 //     background radiance;
 //  6. rgb = radiance * Fresnel (Schlick, F0 = mix(0.04, baseColor, metallic), at n.v) * fade,
 //     a = fade, where fade = 1 - smoothstep(0, cut-off, roughness) reaches 0 at the cut-off.
@@ -38,6 +39,7 @@ SCENE_LIGHTS;
 #define SDF_FIELDS_BINDING 8
 #define SDF_ATLAS_BINDING 9
 #include "sdf_scene.glsl"
+#include "sdf_cone.glsl"
 
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 1) uniform sampler2D gbufferNormal;
@@ -45,7 +47,8 @@ layout(set = 2, binding = 2) uniform sampler2D gbufferMaterial;
 layout(set = 2, binding = 3, rgba16f) uniform writeonly image2D reflectionImage;
 
 layout(push_constant) uniform SdfReflection {
-    uvec4 counts;    // x objects (all, occluder-only fields included), y step limit
+    uvec4 counts;    // x objects (all, occluder-only fields included), y step limit, z 1 = hard
+                     // shadows, w shadow step limit
     vec4 epsilons;   // x hit epsilon, y normal epsilon (pixel footprints), z field safety,
                      // w pixel footprint per unit distance
     vec4 params;     // x longest reflected ray (the far plane), y roughness cut-off
@@ -149,11 +152,32 @@ vec3 objectNormal(uint obj, vec3 p, float h) {
     return normalize(g);
 }
 
-// Visibility of light `light` from the reflected hit p: 1 (reflected hits are not shadowed yet).
-float reflectionShadow(Light light, vec3 p, vec3 n, vec3 l) { return 1.0; }
+// Visibility of a light from the reflected hit p (normal n, direction to the light l), as the
+// shadow pass computes it for a pixel (sdf_shadow.comp): only lights the frame shadows (shadow.x >=
+// 0), the cone half-angle from the light's size (hard rays with the hard setting), the ray lifted
+// off the surface by sdfSurfaceBias; `pixelSize` is the world size of a pixel at the reflected
+// hit's total path length.
+float reflectionShadow(Light light, vec3 p, vec3 n, vec3 l, float pixelSize) {
+    if (light.shadow.x < 0.0) return 1.0;
+    float tMax, sinHalf;
+    if (light.positionType.w < 0.5) {
+        tMax = pc.params.x;
+        sinHalf = sin(light.shadow.y);
+    } else {
+        float dist = length(light.positionType.xyz - p);
+        float radius = light.positionType.w > 1.5 ? min(light.radianceRadius.w, dist) : 0.0;
+        tMax = dist - radius;
+        sinHalf = dist > 0.0 ? radius / dist : 0.0;
+    }
+    if (pc.counts.z != 0u) sinHalf = 0.0;
+    float bias = sdfSurfaceBias(p, pixelSize, pc.counts.x);
+    float epsilon = max(0.5 * pixelSize, 1e-6 * max(length(p), 1.0));
+    return sdfConeVisibility(p + n * bias, l, 2.0 * pixelSize + bias, tMax, sinHalf, pc.counts.x, pc.counts.w,
+                             pc.epsilons.z, epsilon);
+}
 
 // Radiance leaving the hit point p (normal n, material m) towards v, as the lighting pass shades it.
-vec3 shadeHit(Material m, vec3 p, vec3 n, vec3 v) {
+vec3 shadeHit(Material m, vec3 p, vec3 n, vec3 v, float pixelSize) {
     vec3 base = m.baseColor.rgb;
     vec3 radiance = ambientRadiance(n) * base + m.emissiveMetal.rgb;
     for (uint i = 0u; i < scene.params.x; ++i) {
@@ -169,7 +193,7 @@ vec3 shadeHit(Material m, vec3 p, vec3 n, vec3 v) {
             incoming *= distanceFalloff(dl, light.directionRange.w, light.radianceRadius.w);
         }
         if (dot(n, l) <= 0.0) continue;
-        radiance += reflectionShadow(light, p, n, l) *
+        radiance += reflectionShadow(light, p, n, l, pixelSize) *
                     shadeLight(scene.params.y, n, v, l, incoming, base, m.emissiveMetal.w, m.params.x);
     }
     return radiance;
@@ -198,7 +222,7 @@ vec4 reflectPixel(ivec2 pixel, float depth, Material m) {
                       0.5 * sdfObjectVoxel(hit));
         vec3 nq = objectNormal(hit, q, h);
         if (any(isnan(nq))) nq = -r;
-        radiance = shadeHit(materials[sdfObjects[hit].info.z], q, nq, -r);
+        radiance = shadeHit(materials[sdfObjects[hit].info.z], q, nq, -r, pc.epsilons.w * (camDist + t));
     }
     vec3 f0 = mix(vec3(0.04), m.baseColor.rgb, clamp(m.emissiveMetal.w, 0.0, 1.0));
     vec3 fresnel = fresnelSchlick(f0, dot(n, -i));

@@ -7,7 +7,8 @@
 //   2. reflection: a mirror floor under a lit sphere shows the sphere where the analytic mirror image
 //      predicts, with the radiance the lighting's BRDF gives at the reflected hit (CPU, exact ray
 //      casts); elsewhere the background; a material above the roughness cut-off gets weight 0; no
-//      reflective material -> no pass;
+//      reflective material -> no pass; reflected hits are shadowed (a plate out of view hides the
+//      light from the sphere: its reflection shows only the ambient) and lit with shadows off;
 //   3. translucency in the lit image: two back-lit slabs, the thinner transmits more, by
 //      exp(-(w1 - w2) / radius);
 //   4. a golden image per backend of a small scene with both effects, and Vulkan-vs-OpenGL parity.
@@ -274,8 +275,11 @@ struct MirrorScene {
     static constexpr float kRadius = 0.45f;
     static inline const glm::vec3 kBackground{0.1f, 0.2f, 0.4f};
     static inline const glm::vec3 kLightTravel{0.0f, -0.3f, -1.0f};
+    glm::vec3 lightTravel = kLightTravel;
 
-    explicit MirrorScene(bool reflective) {
+    // blocker: the light comes from above the camera instead, and a plate out of view above the
+    // sphere casts its shadow over the whole sphere.
+    explicit MirrorScene(bool reflective, bool blocker = false) {
         ecs::Material m = plainMaterial({1, 1, 1}, 0.0f);
         m.metallic = 1.0f;
         m.reflections = reflective;
@@ -284,7 +288,12 @@ struct MirrorScene {
         mirror = s.object(ShapeNode::box({2.0, 0.1, 6.0}), {-2.0f, -0.1f, -5.0f}, s.material(m));
         rough = s.object(ShapeNode::box({2.0, 0.1, 6.0}), {2.0f, -0.1f, -5.0f}, s.material(rm));
         sphere = s.object(ShapeNode::sphere(kRadius), kCentre, s.material(plainMaterial({0.9f, 0.1f, 0.1f})));
-        s.directionalLight(kLightTravel, {1, 1, 1}, 3.0f);
+        if (blocker) {
+            lightTravel = {0.0f, -1.0f, -1.0f};
+            s.object(ShapeNode::box({0.8, 0.05, 1.0}), {-0.7f, 2.3f, -2.5f},
+                     s.material(plainMaterial({0.5f, 0.5f, 0.5f})));
+        }
+        s.directionalLight(lightTravel, {1, 1, 1}, 3.0f);
     }
     FrameDesc frame(uint32_t w, uint32_t h, scene::TraceQuality q) const {
         FrameDesc d = s.frame(w, h);
@@ -298,7 +307,8 @@ struct MirrorScene {
 // Exact radiance the reflection pass should see along pixel (x, y) of the mirror: the camera ray
 // meets y = 0, mirrors, and hits the sphere (analytic) or not (background). Returns false when the
 // camera ray does not reach the mirror floor.
-bool expectedReflection(const RefCamera& cam, uint32_t x, uint32_t y, glm::dvec3& radiance, bool& hitSphere) {
+bool expectedReflection(const RefCamera& cam, uint32_t x, uint32_t y, glm::dvec3& radiance, bool& hitSphere,
+                        glm::vec3 lightTravel = MirrorScene::kLightTravel, float visibility = 1.0f) {
     const glm::dvec3 d = glm::normalize(cam.dir(x, y));
     if (d.y >= 0.0) return false;
     const double t = -cam.eye.y / d.y;
@@ -316,10 +326,10 @@ bool expectedReflection(const RefCamera& cam, uint32_t x, uint32_t y, glm::dvec3
     const glm::dvec3 p = q + r * (-b - std::sqrt(disc)), n = glm::normalize(p - c);
     const glm::vec3 base(0.9f, 0.1f, 0.1f);
     // Ambient (sky = ground = 0.05) * base + the directional light by the lighting's BRDF.
-    const glm::vec3 l = -glm::normalize(MirrorScene::kLightTravel);
+    const glm::vec3 l = -glm::normalize(lightTravel);
     const glm::vec3 lit = render::reference::shadeLight(scene::ShadingModel::CookTorrance, glm::vec3(n),
                                                         glm::vec3(-r), l, glm::vec3(3.0f), base, 0.0f, 0.8f);
-    radiance = glm::dvec3(0.05f * base + lit);
+    radiance = glm::dvec3(0.05f * base + visibility * lit);
     return true;
 }
 
@@ -404,6 +414,53 @@ TEST_P(SdfThicknessReflection, MirrorFloorReflectsTheSphereWhereTheMirrorImageIs
     SceneRenderer r2(dev());
     plain.s.render(r2, plain.frame(w, h, scene::TraceQuality::High));
     EXPECT_FALSE(hasPass(r2, "sdf_reflection")) << "no reflective material -> no reflection pass";
+}
+
+// Luminance errors of the mirror pixels that see the sphere (and whose +-2 px neighbours agree)
+// against the exact radiance with the light's visibility at the hit.
+Errors reflectedSphereErrors(const std::vector<float>& refl, const std::vector<int>& ids,
+                             const MirrorScene& m, const RefCamera& cam, float visibility) {
+    Errors e;
+    for (uint32_t y = 2; y + 2 < cam.h; ++y)
+        for (uint32_t x = 2; x + 2 < cam.w; ++x) {
+            const size_t i = size_t(y) * cam.w + x;
+            glm::dvec3 expected, other;
+            bool hit = false, h2 = false;
+            if (ids[i] != int(m.mirror.index) ||
+                !expectedReflection(cam, x, y, expected, hit, m.lightTravel, visibility) || !hit)
+                continue;
+            bool edge = false;
+            for (glm::ivec2 o : {glm::ivec2(2, 0), glm::ivec2(-2, 0), glm::ivec2(0, 2), glm::ivec2(0, -2)})
+                edge = edge || !expectedReflection(cam, x + o.x, y + o.y, other, h2) || !h2;
+            if (edge) continue;
+            const double lum = (refl[4 * i] + refl[4 * i + 1] + refl[4 * i + 2]) / 3.0;
+            e.add(lum, (expected.r + expected.g + expected.b) / 3.0, 0.03);
+        }
+    return e;
+}
+
+TEST_P(SdfThicknessReflection, ReflectedHitsAreShadowed) {
+    constexpr uint32_t w = 160, h = 120;
+    MirrorScene m(true, true);
+    ecs::updateTransforms(m.s.world);
+    const RefCamera cam(m.s.world, m.s.camera, w, h);
+    for (int shadows = 0; shadows < 2; ++shadows) {
+        FrameDesc d = m.frame(w, h, scene::TraceQuality::Reference);
+        d.settings.shadows.enabled = shadows == 1;
+        SceneRenderer r(dev());
+        m.s.render(r, d);
+        const std::vector<float> refl = readHalf(r, "effects.reflection", rhi::Format::RGBA16_FLOAT, 4);
+        const std::vector<int> ids = readEntities(r);
+        // Shadows on: the plate hides the light from the whole sphere (visibility 0 at every hit).
+        const Errors e = reflectedSphereErrors(refl, ids, m, cam, shadows == 1 ? 0.0f : 1.0f);
+        std::printf(
+            "  shadows %s: %zu reflected-sphere px vs exact (visibility %d): |rel err| mean %.5f, max %.5f, "
+            "within 3 %%: %.4f\n",
+            shadows ? "on" : "off", e.count, shadows ? 0 : 1, e.mean(), e.max, e.fraction());
+        ASSERT_GT(e.count, 100u);
+        EXPECT_GE(e.fraction(), 0.98) << "radiance within 3 % of exact on >= 98 % of reflected-sphere pixels";
+        EXPECT_LE(e.mean(), 0.01) << "mean |rel err| <= 1 %";
+    }
 }
 
 // ---- 3. translucency in the lit image ----------------------------------------------------------------
