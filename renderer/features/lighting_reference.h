@@ -159,11 +159,16 @@ struct SurfaceSample {
 
 // Linear radiance leaving `s` towards the eye at `eye` (before exposure): ambient * baseColor * ao
 // + emissive + shadow * sum over lights.
+// `visibility`: each light's shadow visibility (the GPU's effects.shadow layer of that light), 1
+// for every light when empty; it multiplies s.shadow.
 inline glm::vec3 shadeSurface(scene::ShadingModel shading, glm::vec3 ambient, const SurfaceSample& s,
-                              glm::vec3 eye, std::span<const LightSample> lights) {
+                              glm::vec3 eye, std::span<const LightSample> lights,
+                              std::span<const float> visibility = {}) {
     glm::vec3 v = glm::normalize(eye - s.position);
     glm::vec3 radiance = ambient * s.baseColor * s.ao + s.emissive;
-    for (const LightSample& light : lights) {
+    for (size_t i = 0; i < lights.size(); ++i) {
+        const LightSample& light = lights[i];
+        const float shadow = s.shadow * (i < visibility.size() ? visibility[i] : 1.0f);
         glm::vec3 l;
         glm::vec3 incoming = light.radiance;
         if (light.type == ecs::LightType::Directional) {
@@ -175,7 +180,7 @@ inline glm::vec3 shadeSurface(scene::ShadingModel shading, glm::vec3 ambient, co
             incoming *= distanceFalloff(d, light.range, light.radius);
         }
         radiance +=
-            s.shadow * shadeLight(shading, s.normal, v, l, incoming, s.baseColor, s.metallic, s.roughness);
+            shadow * shadeLight(shading, s.normal, v, l, incoming, s.baseColor, s.metallic, s.roughness);
     }
     return radiance;
 }

@@ -8,8 +8,13 @@
 // (tests/support/golden.h: per channel <= 5/255 for all but 0.1 % of pixels, none over 64/255), no hit
 // pixel darker than its ambient-only value minus 2/255 (a NaN writes 0), and the sphere light of
 // radius 0 gives exactly the image of a point light at the same place (the falloff clamps at 0.01).
-// (When shadows land: the shadow pass with these lights - a radius-0 sphere light and an angle-0
-// directional light are hard shadows, one ray each, binary visibility - no NaN in gbuffer.material b.)
+// Shadows (renderer/features/sdf_shadow.h) of these lights: a radius-0 sphere light and an angle-0
+// directional light have a zero cone, so their visibility (effects.shadow, one layer per light) is
+// binary: every texel is exactly 0 or 1 (a NaN would not be), and it agrees with the exact
+// visibility (segment / ray against the analytic sphere, in double precision) on every plane pixel
+// within the bulb's range whose exact shadow ray clears the sphere's surface, or enters it, by more
+// than 2 pixel footprints (the pass starts its rays a few footprints off the surface). The lit image is
+// compared with the CPU lighting given the GPU's per-light visibility.
 #include "renderer/features/lighting_reference.h"
 #include "stability/stability_util.h"
 #include "support/golden.h"
@@ -53,11 +58,15 @@ TEST_P(StabilityLights, Case09_ZeroAreaLights) {
         render::SceneRenderer r(dev());
         render::FrameDesc fd = s.frame(w, h);
         fd.settings.ambient = glm::vec3(0.1f);
+        fd.settings.shadows.resolutionScale = 1.0f;  // the shadow pass itself (no upsampling blend)
         GBuffer g;
         ASSERT_TRUE(renderAndRead(s, r, fd, g));
         ImageRGBA8& image = images[pass];
         std::string error;
         ASSERT_TRUE(r.readPixels(image, error)) << error;
+        // Layer 0: the bulb (created first), layer 1: the sun; R8, layer k at columns [k w, (k + 1) w).
+        const std::vector<uint8_t> shadow = readRaw(r, "effects.shadow", rhi::Format::R8_UNORM);
+        ASSERT_EQ(shadow.size(), size_t(2) * w * h);
 
         // The CPU reference on the frame's G-buffer.
         const RefCamera cam(s.world, s.camera, w, h);
@@ -69,7 +78,8 @@ TEST_P(StabilityLights, Case09_ZeroAreaLights) {
                                                     fd.settings.exposure, fd.settings.toneMapper);
         const auto background =
             ref::displayEncode(fd.settings.background, fd.settings.exposure, fd.settings.toneMapper);
-        size_t dark = 0, hits = 0;
+        size_t dark = 0, hits = 0, nonBinary = 0, compared = 0, wrong = 0, shadowed = 0;
+        const double footprint = 2.0 * std::tan(double(kFovY) / 2.0) / double(h);  // pixel size per unit
         for (uint32_t y = 0; y < h; ++y)
             for (uint32_t x = 0; x < w; ++x) {
                 const size_t i = g.at(x, y);
@@ -81,8 +91,32 @@ TEST_P(StabilityLights, Case09_ZeroAreaLights) {
                     sample.normal = g.normal[i];
                     sample.baseColor = glm::vec3(mat.baseColor);
                     sample.roughness = mat.roughness;
+                    const float vis[2] = {shadow[size_t(y) * 2 * w + x] / 255.0f,
+                                          shadow[size_t(y) * 2 * w + w + x] / 255.0f};
+                    for (float v : vis) nonBinary += v != 0.0f && v != 1.0f;
+                    const glm::dvec3 p = cam.eye + cam.dir(x, y) * double(g.depth[i]);
+                    if (p.y < -0.59) {  // the plane: exact visibility of both lights
+                        const double margin = 2.0 * footprint * double(g.depth[i]);
+                        const glm::dvec3 toBulb = glm::dvec3(0.0, 0.0, -2.4) - p;
+                        const glm::dvec3 toSun = -glm::dvec3(glm::normalize(glm::vec3(-0.4f, -1.0f, -0.3f)));
+                        const double reach[2] = {glm::length(toBulb), 1e9};
+                        const glm::dvec3 dirs[2] = {toBulb / reach[0], toSun};
+                        for (int k = 0; k < 2; ++k) {
+                            // Closest approach of the ray to the sphere's centre, within the segment.
+                            const glm::dvec3 oc = glm::dvec3(0, 0, -3) - p;
+                            const double t = glm::clamp(glm::dot(oc, dirs[k]), 0.0, reach[k]);
+                            const double clearance = glm::length(oc - t * dirs[k]) - 0.6;
+                            // Beyond the bulb's range the light adds nothing and the pass skips it
+                            // (visibility 1, renderer/features/sdf_shadow.h).
+                            if (std::abs(clearance) <= margin || reach[k] >= double(l.range)) continue;
+                            const bool lit = clearance > 0.0;
+                            ++compared;
+                            shadowed += !lit;
+                            wrong += (vis[k] > 0.5f) != lit;
+                        }
+                    }
                     want = ref::displayEncode(ref::shadeSurface(fd.settings.shading, fd.settings.ambient,
-                                                                sample, glm::vec3(cam.eye), lights),
+                                                                sample, glm::vec3(cam.eye), lights, vis),
                                               fd.settings.exposure, fd.settings.toneMapper);
                     for (int c = 0; c < 3; ++c)
                         dark += int(image.pixels[i * 4 + size_t(c)]) < int(ambientOnly[size_t(c)]) - 2;
@@ -95,9 +129,16 @@ TEST_P(StabilityLights, Case09_ZeroAreaLights) {
                 "(parity rule), "
                 "%zu channel values below ambient-only (0)",
                 pass == 0 ? "sphere light" : "point light ", hits, diff.summary().c_str(), dark);
+        summary("09 zero-area lights", GetParam(),
+                "%s: shadow texels not 0 or 1: %zu (0); exact visibility on the plane: %zu of %zu "
+                "light-pixel pairs disagree (0), %zu of them shadowed",
+                pass == 0 ? "sphere light" : "point light ", nonBinary, wrong, compared, shadowed);
         EXPECT_GT(hits, size_t(w) * h / 3);
         EXPECT_TRUE(diff.pass) << diff.summary();
         EXPECT_EQ(dark, 0u);
+        EXPECT_EQ(nonBinary, 0u);  // zero-size lights: binary visibility
+        EXPECT_EQ(wrong, 0u);      // exact agreement beyond 2 pixel footprints of a shadow edge
+        EXPECT_GT(shadowed, 50u);  // the comparison covers shadowed pixels, not only lit ones
     }
     const ImageDiff same = compareImages(images[0], images[1]);
     summary("09 zero-area lights", GetParam(), "sphere light radius 0 vs point light: %s (identical)",
