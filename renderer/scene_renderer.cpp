@@ -96,8 +96,8 @@ struct DrawSource {
 struct SdfSource {
     ecs::Entity entity;
     const ecs::SdfRenderer* renderer = nullptr;
-    glm::mat4 model{1.0f};
     bool occluder = false;  // SdfRenderer::occluderOnly: a rasterized mesh's field (--mesh-sdf occlusion)
+    glm::mat4 model{1.0f};
     float sigma = 1.0f;  // smallest singular value of the model's 3x3 part
     uint32_t material = 0;
     const sdf::ShapeProgram* program = nullptr;  // analytic shapes, or
@@ -481,6 +481,7 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
         SdfSource s;
         s.entity = e;
         s.renderer = &sr;
+        s.occluder = sr.occluderOnly;
         s.model = t.worldMatrix;
         const ecs::Name* name = world.get<ecs::Name>(e);
         const std::string who =
@@ -506,7 +507,6 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
             skip(fmt::format("scale ({}, {}, {}) is zero, negative or not finite", sc.x, sc.y, sc.z));
             continue;
         }
-        s.occluder = sr.occluderOnly;
         s.sigma = finite(s.model) ? smallestSingularValue(glm::mat3(s.model)) : 0.0f;
         if (!finite(s.model) || !(s.sigma > 1e-20f) || glm::determinant(glm::mat3(s.model)) <= 0.0f) {
             skip("world matrix is not finite, singular or mirrored");

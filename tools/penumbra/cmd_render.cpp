@@ -108,10 +108,10 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                    {"textureAssets", assets.count(assets::AssetKind::Texture)},
                    {"sdfRenderers", world.count<ecs::SdfRenderer>()},
                    {"sdfObjects", stats.sdfObjects},
+                   {"sdfOccluders", stats.sdfOccluders},
                    {"drawCalls", stats.drawCalls},
                    {"triangles", stats.triangles}};
     j["assetCache"] = {{"dir", run.cacheDir},
-                   {"sdfOccluders", stats.sdfOccluders},
                        {"hits", assets.cacheStats().hits},
                        {"misses", assets.cacheStats().misses},
                        {"writes", assets.cacheStats().writes},
@@ -255,17 +255,17 @@ int runRender(const RenderOptions& opt) {
         settings.shadows.hard = opt.shadows == "hard";
     }
     if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
-    if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
-    if (!opt.slice.empty()) settings.slice = slice;
-    if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
-        log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
-        return 1;
     // After the effect overrides: auto looks at them.
     if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
     if (!scene::applyMeshSdf(engine->scene(), engine->assets(), settings.meshSdf, error)) {
         log::error("{}: {}", opt.scene, error);
         return 1;
     }
+    if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
+    if (!opt.slice.empty()) settings.slice = slice;
+    if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
+        log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
+        return 1;
     }
 
     std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
