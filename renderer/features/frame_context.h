@@ -7,7 +7,12 @@
 //   sdf_scene       SdfSceneData (CPU)             SdfSceneBuffers
 //   sdf_trace       SceneBuffers, SdfSceneBuffers, (reads the mesh pass's depth, writes the GBuffer)
 //                   GBuffer
-//   lighting        SceneBuffers, GBuffer, Output  (writes Output)
+//   sdf_surface     SceneBuffers, SdfSceneBuffers, (writes GBuffer albedo / normal of textured
+//                   GBuffer, material textures      SDF materials)
+//   effects         SceneBuffers, SdfSceneBuffers, Effects, EffectsLowRes (renderer/features/
+//                   GBuffer                          effects.h; writes the Effects targets)
+//   lighting        SceneBuffers, GBuffer, Effects  (writes Output)
+//                   (when published), Output
 //   debug_view      SceneBuffers, GBuffer (aux for  (writes Output instead of lighting)
 //                   ids / steps), Output
 //   debug_field_    SceneBuffers, SdfSceneBuffers  (writes Output instead of lighting; adds an
@@ -50,7 +55,7 @@ struct SceneBuffers {
 struct GBuffer {
     fg::TextureRef depth;     // R32_FLOAT linear view depth
     fg::TextureRef normal;    // RG16_FLOAT octahedral world normal
-    fg::TextureRef material;  // RGBA8_UNORM material index (16 bit) / shadow / AO
+    fg::TextureRef material;  // RGBA8_UNORM material index (16 bit) / SDF object index + 1 (16 bit)
     fg::TextureRef velocity;  // RG16_FLOAT pixels
     fg::TextureRef albedo;    // RGBA8_UNORM sRGB-encoded (gbuffer.glsl packAlbedo), optional
     fg::TextureRef aux;       // RG32_FLOAT entity index / trace steps, optional (AOVs, debug views)
