@@ -396,6 +396,51 @@ bool settingRows(const BackendRun& run, Renderer& renderer, const EffectSetting&
     return true;
 }
 
+// One untimed frame with gbuffer.aux for setting `si` (the engine's settings applied): its rows,
+// with the setting's timings. False (logged) on failure.
+bool measureSetting(const BackendRun& run, Renderer& renderer, size_t si, FrameTimer& timer,
+                    const std::string& label, std::vector<Row>& rows) {
+    std::string error;
+    const EffectSetting& s = run.sweep[si];
+    render::FrameDesc fd;
+    fd.camera = scene::findCamera(run.engine.world(), run.engine.settings().camera);
+    fd.settings = run.engine.settings();
+    fd.width = run.opt.effectWidth;
+    fd.height = run.opt.effectHeight;
+    fd.aux = true;
+    Row base;
+    base.scene = run.info.path;
+    base.pass = s.pass;
+    base.backend = run.backend;
+    base.device = run.device;
+    base.setting = s.param;
+    base.value = s.value;
+    base.baseline = s.baseline;
+    base.frames = run.opt.frames;
+    const size_t first = rows.size();
+    if (!renderer.sceneRenderer().render(run.engine.world(), run.engine.assets(), fd, error) ||
+        !settingRows(run, renderer, s, base, rows, error)) {
+        log::error("{}: {}: {}={}: {}", kCommand, label, s.param, s.value, error);
+        return false;
+    }
+    timer.tag(-1, s.pass);
+    if (!timer.collect(true)) {
+        log::error("{}: {}: more frame timings than frames", kCommand, label);
+        return false;
+    }
+    for (size_t r = first; r < rows.size(); ++r) {
+        rows[r].gpuMedian = median(timer.gpu[si]);
+        rows[r].frameMedian = median(timer.frame[si]);
+        rows[r].gpuMin = minimum(timer.gpu[si]);
+        rows[r].frameMin = minimum(timer.frame[si]);
+    }
+    const Row& shown = rows[first];
+    fmt::print(stderr, "[{}] {}/{} {} {}={}: {} ms, mean |err| {}, p99 {}\n", label, si + 1, run.sweep.size(),
+               s.pass, s.param, s.value, num(shown.gpuMedian), num(shown.metrics[kEffectMean]),
+               num(shown.metrics[kEffectP99]));
+    return true;
+}
+
 int runEffectBackend(BackendRun& run, rhi::Backend backend, std::vector<Row>& rows) {
     std::string error;
     const BenchAccuracyOptions& opt = run.opt;
@@ -444,44 +489,8 @@ int runEffectBackend(BackendRun& run, rhi::Backend backend, std::vector<Row>& ro
         fmt::print(stderr, "[{}] timed round {}/{} ({} frames)\n", label, round + 1, opt.frames, count);
     }
     for (size_t si = 0; si < count; ++si) {
-        const EffectSetting& s = run.sweep[si];
-        applySetting(settings, original, s);
-        render::FrameDesc fd;
-        fd.camera = scene::findCamera(run.engine.world(), settings.camera);
-        fd.settings = settings;
-        fd.width = opt.effectWidth;
-        fd.height = opt.effectHeight;
-        fd.aux = true;
-        Row base;
-        base.scene = run.info.path;
-        base.pass = s.pass;
-        base.backend = run.backend;
-        base.device = run.device;
-        base.setting = s.param;
-        base.value = s.value;
-        base.baseline = s.baseline;
-        base.frames = opt.frames;
-        const size_t first = rows.size();
-        if (!renderer->sceneRenderer().render(run.engine.world(), run.engine.assets(), fd, error) ||
-            !settingRows(run, *renderer, s, base, rows, error)) {
-            log::error("{}: {}: {}={}: {}", kCommand, label, s.param, s.value, error);
-            return 1;
-        }
-        timer.tag(-1, s.pass);
-        if (!timer.collect(true)) {
-            log::error("{}: {}: more frame timings than frames", kCommand, label);
-            return 1;
-        }
-        for (size_t r = first; r < rows.size(); ++r) {
-            rows[r].gpuMedian = median(timer.gpu[si]);
-            rows[r].frameMedian = median(timer.frame[si]);
-            rows[r].gpuMin = minimum(timer.gpu[si]);
-            rows[r].frameMin = minimum(timer.frame[si]);
-        }
-        const Row& shown = rows[first];
-        fmt::print(stderr, "[{}] {}/{} {} {}={}: {} ms, mean |err| {}, p99 {}\n", label, si + 1, count,
-                   s.pass, s.param, s.value, num(shown.gpuMedian), num(shown.metrics[kEffectMean]),
-                   num(shown.metrics[kEffectP99]));
+        applySetting(settings, original, run.sweep[si]);
+        if (!measureSetting(run, *renderer, si, timer, label, rows)) return 1;
     }
     if (!timer.collect(true) || !timer.complete()) {
         log::error("{}: {}: frame timings and frames disagree", kCommand, label);

@@ -845,6 +845,26 @@ int runTraceRows(const BenchAccuracyOptions& opt, Engine& engine, ecs::Entity ca
     return 0;
 }
 
+// The effect passes' plots, for the passes that have rows (known only after the work; the output
+// folder was checked before it with the CSV). False (logged) when a path cannot be written.
+bool addEffectPlots(const BenchAccuracyOptions& opt, const std::vector<Row>& rows,
+                    const std::vector<std::string>& plotMetrics, std::vector<std::string>& plotNames,
+                    OutputFiles& outputs) {
+    std::string error;
+    for (const char* pass : {kShadowPass, kAoPass}) {
+        if (std::none_of(rows.begin(), rows.end(), [&](const Row& r) { return r.pass == pass; })) continue;
+        for (const std::string& m : plotMetrics) {
+            if (!isEffectMetric(metricIndex(m))) continue;
+            plotNames.push_back(fmt::format("{}_{}.png", pass, m));
+            if (!outputs.add(opt.outputDir + "/" + plotNames.back(), error)) {
+                log::error("{}: {}", kCommand, error);
+                return false;
+            }
+        }
+    }
+    return true;
+}
+
 }  // namespace
 
 const std::vector<AccuracyMetricInfo>& accuracyMetrics() {
@@ -1023,19 +1043,7 @@ int runBenchAccuracy(const BenchAccuracyOptions& opt) {
     const std::string loadAfter = loadAverage();
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    // The effect passes' plots, for the passes that have rows (known only now; the folder was
-    // checked before the work with the CSV).
-    for (const char* pass : {kShadowPass, kAoPass}) {
-        const bool any = std::any_of(rows.begin(), rows.end(), [&](const Row& r) { return r.pass == pass; });
-        for (size_t m = 0; plots && any && m < plotMetrics.size(); ++m)
-            if (isEffectMetric(metricIndex(plotMetrics[m]))) {
-                plotNames.push_back(fmt::format("{}_{}.png", pass, plotMetrics[m]));
-                if (!outputs.add(opt.outputDir + "/" + plotNames.back(), error)) {
-                    log::error("{}: {}", kCommand, error);
-                    return 1;
-                }
-            }
-    }
+    if (plots && !addEffectPlots(opt, rows, plotMetrics, plotNames, outputs)) return 1;
     const std::string csv = csvReport(rows);
     const std::string md = markdownReport(opt, rows, scenes, date, loadBefore, loadAfter) +
                            (effectScenes.empty() ? std::string() : effectsMarkdown(opt, rows, effectScenes));
