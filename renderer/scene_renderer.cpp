@@ -549,7 +549,7 @@ void SceneRenderer::Impl::planEffects(const FrameDesc& desc, FrameGather& g) {
                         view == DebugView::BentNormal || view == DebugView::Thickness;
     const bool on = wanted && !g.sdfs.empty();
     // TEMPORARY while the effect modules land (issue 12): an effect whose module is not written yet is off.
-    constexpr bool kShadowModule = true, kAoModule = false, kThicknessModule = true,
+    constexpr bool kShadowModule = true, kAoModule = true, kThicknessModule = true,
                    kReflectionModule = true;
     uint32_t layers = 0;
     for (LightSource& l : g.lights)

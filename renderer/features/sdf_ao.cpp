@@ -1,8 +1,122 @@
+// The "sdf_ao" pass (renderer/features/sdf_ao.h): picks the shader variant, sizes the target and
+// fills the push constants; the algorithms live in renderer/shaders/sdf_ao.comp.
 #include "renderer/features/sdf_ao.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <shaders/sdf_ao.h>
+
+#include "renderer/core/shader_params.h"
+#include "renderer/core/targets.h"
+#include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
 
-// Placeholder until the module lands (adds no pass).
-void addSdfAo(FrameContext&, const EffectsDesc&) {}
+namespace {
+
+namespace program = shaders::sdf_ao;
+
+program::Variant aoVariant(scene::AoVariant v, bool fields) {
+    using V = program::Variant;
+    switch (v) {
+        case scene::AoVariant::MultiRay:
+            return fields ? V::MultiRaySdfFields : V::MultiRay;
+        case scene::AoVariant::Cones:
+            return fields ? V::ConesSdfFields : V::Cones;
+        default:
+            return fields ? V::SdfFields : V::Default;
+    }
+}
+
+// Step limit per ray: exact binary rays skip the stretches outside every bounds box, so few steps
+// remain; cones march by distance with at least a tenth of the cone radius per step.
+uint32_t aoStepLimit(const EffectsDesc& desc, bool exact) {
+    static constexpr uint32_t kConeSteps[] = {24, 32, 48, 64};  // low, medium, high, reference
+    if (exact) return 256;
+    return kConeSteps[std::min(uint32_t(desc.quality), 3u)];
+}
+
+}  // namespace
+
+void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        fg::TextureRef depth, normal, out;
+    };
+    const GBuffer& gbuffer = *fc.board.find<GBuffer>();
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const bool fields = sdfScene.atlas.isValid();
+    const rhi::ShaderDesc& cs = program::compute(aoVariant(desc.ao.variant, fields));
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    rhi::SamplerDesc linear;  // trilinear field sampling (slots are sampled inside)
+    linear.debugName = "sdf.atlas";
+    const rhi::SamplerHandle atlasSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    rhi::SamplerDesc nearestDesc;
+    nearestDesc.minFilter = nearestDesc.magFilter = rhi::Filter::Nearest;
+    nearestDesc.debugName = "sdf_ao.gbuffer";
+    const rhi::SamplerHandle nearest = fc.cache.sampler(nearestDesc);
+
+    const float scale = std::clamp(desc.ao.resolutionScale, 0.0f, 1.0f);
+    const bool full = scale >= 1.0f;
+    const uint32_t w = full ? fc.width : std::max(1u, uint32_t(std::lround(float(fc.width) * scale)));
+    const uint32_t h = full ? fc.height : std::max(1u, uint32_t(std::lround(float(fc.height) * scale)));
+    const bool exact =
+        desc.ao.variant == scene::AoVariant::MultiRay && desc.quality == scene::TraceQuality::Reference;
+    const program::PushConstants push{
+        glm::uvec4(sdfScene.objectCount, desc.ao.rays, exact ? 1u : 0u, aoStepLimit(desc, exact)),
+        glm::vec4(desc.ao.maxDistance, desc.ao.strength, desc.trace.fieldSafety, desc.footprint),
+        glm::vec4(desc.trace.hitEpsilon, 0.0f, 0.0f, 0.0f)};
+
+    const Data& pass = fc.graph.addPass<Data>(
+        "sdf_ao", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
+            d.normal = b.read(gbuffer.normal, rhi::Access::ShaderSampled);
+            if (full) {
+                d.out = fc.board.find<Effects>()->ao;
+            } else {
+                using TU = rhi::TextureUsage;
+                d.out =
+                    b.createTexture("sdf_ao.low", renderTargetDesc(rhi::Format::RGBA8_UNORM, w, h,
+                                                                   "sdf_ao.low", TU::Storage | TU::Sampled));
+            }
+            b.write(d.out, rhi::Access::ShaderWrite);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            b.read(d.sdf.objects, rhi::Access::ShaderRead);
+            b.read(d.sdf.records, rhi::Access::ShaderRead);
+            if (fields) {
+                b.read(d.sdf.fields, rhi::Access::ShaderRead);
+                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
+            }
+        },
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h, fields](const Data& d,
+                                                                                      fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("SdfObjects", ctx.buffer(d.sdf.objects))
+                .set("ShapeRecords", ctx.buffer(d.sdf.records))
+                .set("gbufferDepth", ctx.texture(d.depth), nearest)
+                .set("gbufferNormal", ctx.texture(d.normal), nearest)
+                .setStorage("aoImage", ctx.texture(d.out));
+            if (fields)
+                params.set("SdfFields", ctx.buffer(d.sdf.fields))
+                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), atlasSampler);
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            dispatchOver(ctx.cmd, cs, w, h);
+        });
+    if (!full) {
+        EffectsLowRes copy = *fc.board.find<EffectsLowRes>();
+        copy.ao = pass.out;
+        copy.aoWidth = w;
+        copy.aoHeight = h;
+        fc.board.add(copy);
+    }
+}
 
 }  // namespace penumbra::render
