@@ -240,7 +240,7 @@ struct SceneRenderer::Impl {
         if (const EffectsLowRes* low = board.find<EffectsLowRes>()) {
             if (low->shadow.isValid())
                 r.lowResBytes += uint64_t(low->shadowWidth) * r.shadowLayers * low->shadowHeight;  // R8
-            if (low->ao.isValid()) r.lowResBytes += uint64_t(low->aoWidth) * low->aoHeight * 4;  // RGBA8
+            if (low->ao.isValid()) r.lowResBytes += uint64_t(low->aoWidth) * low->aoHeight * 4;    // RGBA8
         }
         return r;
     }
@@ -517,8 +517,8 @@ bool SceneRenderer::Impl::gatherSdfs(const ecs::World& world, const assets::Asse
     std::sort(g.sdfs.begin(), g.sdfs.end(), [](const SdfSource& a, const SdfSource& b) {
         return a.occluder != b.occluder ? b.occluder : a.entity.index < b.entity.index;
     });
-    g.tracedSdfs = uint32_t(
-        std::count_if(g.sdfs.begin(), g.sdfs.end(), [](const SdfSource& s) { return !s.occluder; }));
+    g.tracedSdfs =
+        uint32_t(std::count_if(g.sdfs.begin(), g.sdfs.end(), [](const SdfSource& s) { return !s.occluder; }));
     return true;
 }
 
@@ -548,21 +548,18 @@ void SceneRenderer::Impl::planEffects(const FrameDesc& desc, FrameGather& g) {
     const bool wanted = view == DebugView::None || view == DebugView::Ao || view == DebugView::Shadow ||
                         view == DebugView::BentNormal || view == DebugView::Thickness;
     const bool on = wanted && !g.sdfs.empty();
-    // TEMPORARY while the effect modules land (issue 12): an effect whose module is not written yet is off.
-    constexpr bool kShadowModule = true, kAoModule = true, kThicknessModule = true,
-                   kReflectionModule = true;
     uint32_t layers = 0;
     for (LightSource& l : g.lights)
-        l.shadowLayer = on && kShadowModule && fx.shadows.enabled && l.castShadows ? int32_t(layers++) : -1;
+        l.shadowLayer = on && fx.shadows.enabled && l.castShadows ? int32_t(layers++) : -1;
     fx.shadowLayers = layers;
-    if (!on || !kAoModule) fx.ao.variant = scene::AoVariant::Off;
+    if (!on) fx.ao.variant = scene::AoVariant::Off;
     bool thickness = false, reflection = false;
     for (const ecs::Material* m : g.materials) {
         thickness = thickness || m->subsurface > 0.0f;
         reflection = reflection || (m->reflections && m->roughness <= fx.reflections.roughnessCutoff);
     }
-    fx.thickness = on && kThicknessModule && thickness;
-    fx.reflection = on && kReflectionModule && reflection;
+    fx.thickness = on && thickness;
+    fx.reflection = on && reflection;
 }
 
 // GPU copies of the meshes and (albedo frames) textures this frame needs.
