@@ -714,11 +714,15 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
             lo = h.boundsMin - h.voxelSize;
             hi = h.boundsMax + h.voxelSize;
         }
-        // A relative margin keeps rays that graze a box edge (float rounding) inside it.
-        const glm::dvec3 margin = 1e-4 * glm::max(glm::abs(lo), glm::abs(hi)) + 1e-6;
+        // A relative margin keeps rays that graze a box edge (float rounding) inside it; from the
+        // finite sides only (a half-space such as a plane is unbounded on one side, and an infinite
+        // margin would unbound its finite side too).
         for (int a = 0; a < 3; ++a) {
-            o.boundsMin[a] = bound(std::isfinite(lo[a]) ? lo[a] - margin[a] : -HUGE_VAL);
-            o.boundsMax[a] = bound(std::isfinite(hi[a]) ? hi[a] + margin[a] : HUGE_VAL);
+            const double scale = std::max(std::isfinite(lo[a]) ? std::abs(lo[a]) : 0.0,
+                                          std::isfinite(hi[a]) ? std::abs(hi[a]) : 0.0);
+            const double margin = 1e-4 * scale + 1e-6;
+            o.boundsMin[a] = bound(std::isfinite(lo[a]) ? lo[a] - margin : -HUGE_VAL);
+            o.boundsMax[a] = bound(std::isfinite(hi[a]) ? hi[a] + margin : HUGE_VAL);
         }
         o.boundsMin.w = s.sigma;
         o.params = {s.renderer->maxSteps, s.renderer->castShadows ? kSdfObjectCastsShadows : 0u, 0u, 0u};
