@@ -169,6 +169,7 @@ struct SceneRenderer::Impl {
     SdfSceneData sdfData;                     // read by sdf_upload's execute
     SdfAtlas atlas;                           // the fields of the frame's SdfRenderers
     uint32_t shadowLayers = 0;                // layers of targets[kShadow]
+    uint32_t warnedShadowWidth = 0;           // frame width last warned about for too many shadow layers
     uint32_t frameIndex = 0;
 
     // the last frame
@@ -548,9 +549,22 @@ void SceneRenderer::Impl::planEffects(const FrameDesc& desc, FrameGather& g) {
     const bool wanted = view == DebugView::None || view == DebugView::Ao || view == DebugView::Shadow ||
                         view == DebugView::BentNormal || view == DebugView::Thickness;
     const bool on = wanted && !g.sdfs.empty();
-    uint32_t layers = 0;
-    for (LightSource& l : g.lights)
-        l.shadowLayer = on && fx.shadows.enabled && l.castShadows ? int32_t(layers++) : -1;
+    // The shadow strip holds one frame-wide column block per shadowed light: at most
+    // maxTextureSize2D / width of them; further lights are unshadowed (one warning per frame size).
+    const uint32_t maxLayers = std::max<uint32_t>(device.info().limits.maxTextureSize2D, 1) / desc.width;
+    uint32_t layers = 0, dropped = 0;
+    for (LightSource& l : g.lights) {
+        const bool shadowed = on && fx.shadows.enabled && l.castShadows;
+        l.shadowLayer = shadowed && layers < maxLayers ? int32_t(layers++) : -1;
+        dropped += shadowed && l.shadowLayer < 0;
+    }
+    if (dropped && warnedShadowWidth != desc.width) {
+        warnedShadowWidth = desc.width;
+        log::warn(
+            "{} shadowed light(s) beyond the first {} are drawn unshadowed: a {}-pixel-wide frame "
+            "fits {} shadow layers in a {}-texel texture",
+            dropped, layers, desc.width, maxLayers, device.info().limits.maxTextureSize2D);
+    }
     fx.shadowLayers = layers;
     if (!on) fx.ao.variant = scene::AoVariant::Off;
     bool thickness = false, reflection = false;
@@ -714,13 +728,14 @@ void SceneRenderer::Impl::fillSdfData(const FrameGather& g) {
             lo = h.boundsMin - h.voxelSize;
             hi = h.boundsMax + h.voxelSize;
         }
-        // A relative margin keeps rays that graze a box edge (float rounding) inside it; from the
-        // finite sides only (a half-space such as a plane is unbounded on one side, and an infinite
-        // margin would unbound its finite side too).
+        // A relative margin keeps rays that graze a box edge (float rounding) inside it. An axis
+        // with an infinite side (a half-space such as a plane) gets an infinite margin, so its
+        // finite side is unbounded too: the trace accepts hits up to its hit epsilon in front of a
+        // surface, which for a plane seen far away lies well above a tight box top (a finite top
+        // lost the far floor's horizon pixels).
+        const glm::dvec3 margins = 1e-4 * glm::max(glm::abs(lo), glm::abs(hi)) + 1e-6;
         for (int a = 0; a < 3; ++a) {
-            const double scale = std::max(std::isfinite(lo[a]) ? std::abs(lo[a]) : 0.0,
-                                          std::isfinite(hi[a]) ? std::abs(hi[a]) : 0.0);
-            const double margin = 1e-4 * scale + 1e-6;
+            const double margin = margins[a];
             o.boundsMin[a] = bound(std::isfinite(lo[a]) ? lo[a] - margin : -HUGE_VAL);
             o.boundsMax[a] = bound(std::isfinite(hi[a]) ? hi[a] + margin : HUGE_VAL);
         }

@@ -35,7 +35,8 @@ TEST(SceneFiles, DefaultSceneLoads) {
     EXPECT_FALSE(findCamera(w, "top").isNull());
     EXPECT_EQ(w.count<ecs::Camera>(), 2u);
     EXPECT_EQ(countLights(w, ecs::LightType::Directional), 1u);
-    EXPECT_EQ(countLights(w, ecs::LightType::Point), 2u);
+    EXPECT_EQ(countLights(w, ecs::LightType::Point), 1u);
+    EXPECT_EQ(countLights(w, ecs::LightType::Sphere), 1u);  // soft shadows from its radius
     // One rasterized mesh (hybrid), everything else traced.
     EXPECT_EQ(w.count<ecs::MeshRenderer>(), 1u);
     EXPECT_EQ(w.count<ecs::SdfRenderer>(), 8u);
