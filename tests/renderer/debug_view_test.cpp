@@ -337,6 +337,11 @@ const GoldenCase kGoldens[] = {
     {"debug_sdf_field_slice", render::DebugView::FieldSlice, 64},
     {"debug_sdf_normals", render::DebugView::Normals, 64},
     {"debug_sdf_depth", render::DebugView::Depth, 32},
+    // The effect views (issue 12 item 7), with 9-cone AO switched on for the frame: AO and the
+    // shadow of the first shadowed light in grey, the bent normal as normal * 0.5 + 0.5.
+    {"debug_sdf_ao", render::DebugView::Ao, 32},
+    {"debug_sdf_shadow", render::DebugView::Shadow, 16},
+    {"debug_sdf_bentnormal", render::DebugView::BentNormal, 64},
 };
 
 bool renderShapes(rhi::Device& device, const GoldenCase& c, ImageRGBA8& image, std::string& error) {
@@ -347,6 +352,7 @@ bool renderShapes(rhi::Device& device, const GoldenCase& c, ImageRGBA8& image, s
     }
     l.frame.debugView = c.view;
     l.frame.settings.slice = {0, 1, 0, 0.7f};  // --slice y=0.7: through the pillars, boxes, blob and cone
+    l.frame.settings.ao.variant = scene::AoVariant::Cones;  // only the effect views show it
     Frame f;
     if (!renderFrame(device, l, f, error)) return false;
     image = std::move(f.image);
