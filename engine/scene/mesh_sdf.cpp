@@ -8,6 +8,7 @@
 #include <vector>
 
 #include <fmt/format.h>
+#include <glm/common.hpp>
 
 #include "engine/core/log.h"
 #include "engine/sdf/bake.h"
@@ -83,6 +84,23 @@ struct Baked {
 };
 using BakedMeshes = std::unordered_map<assets::AssetId, Baked>;  // mesh -> its field (one reference)
 
+// A flat mesh (its bounds' smallest extent under 1 % of the largest: a floor plane, a sheet) gets no
+// occlusion field: baked at the coarse occlusion resolution, a zero-thickness sheet's field is about
+// a voxel thick, which darkens everything within a voxel of it (its conservative distance is
+// lowered by the interpolation bound) and pushes the shadow rays of the points on it a voxel off
+// the surface, past the objects standing on it. It cannot occlude anything on its lit side; it still
+// receives shadows and AO.
+bool isFlat(const assets::MeshData& mesh) {
+    if (mesh.positions.empty()) return false;
+    glm::vec3 lo = mesh.positions.front(), hi = lo;
+    for (const glm::vec3& p : mesh.positions) {
+        lo = glm::min(lo, p);
+        hi = glm::max(hi, p);
+    }
+    const glm::vec3 e = hi - lo;
+    return std::min({e.x, e.y, e.z}) < 0.01f * std::max({e.x, e.y, e.z});
+}
+
 // Bakes each distinct mesh of `entities` once. Trace: the first failure releases every field baked
 // so far and returns false with `error`. Occlusion: a failing mesh is warned about and its entities
 // are removed from `entities`.
@@ -100,6 +118,10 @@ bool bakeMeshes(const ecs::World& world, assets::AssetManager& assets, MeshSdfMo
             return false;
         }
         const assets::AssetId mesh = world.get<ecs::MeshRenderer>(e)->mesh;
+        if (mode == MeshSdfMode::Occlusion && assets.mesh(mesh) && isFlat(*assets.mesh(mesh))) {
+            log::debug("--mesh-sdf occlusion: {} is flat: no occlusion field", entityLabel(world, e));
+            continue;
+        }
         if (!baked.count(mesh) && !failed.count(mesh)) {
             std::string why;
             assets::AssetId field = 0;

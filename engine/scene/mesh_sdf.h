@@ -55,6 +55,8 @@ MeshSdfMode resolveMeshSdfMode(const Scene& scene, MeshSdfMode mode);
 // SdfRenderer with occluderOnly = true (source MeshBake, the mesh's baked field, the same
 // material, visible, castShadows; `resolution` 0 = kOcclusionResolution). Entities that already
 // have an SdfRenderer are skipped (their own SDF takes part in the effects; logged at debug level),
+// and so are flat meshes (smallest bounds extent < 1 % of the largest: floors, sheets; a coarse field
+// of a zero-thickness sheet would darken everything within a voxel of it),
 // which also makes a second application a no-op. A mesh that cannot be baked is skipped with one
 // warning naming the entity and the reason (the frame still renders; that mesh casts no SDF
 // shadows): occlusion is on by default, so a degenerate mesh must not fail a scene that rasterizes.

@@ -308,6 +308,24 @@ TEST_F(MeshSdfTest, OcclusionSkipsMeshesThatCannotBeBaked) {
     EXPECT_EQ(m_assets.count(), 0u);
 }
 
+// Criterion: a flat mesh (a floor plane: smallest bounds extent under 1 % of the largest) gets no
+// occlusion field, nor is it baked; a thin but not flat box still does.
+TEST_F(MeshSdfTest, OcclusionSkipsFlatMeshes) {
+    Scene s;
+    std::string error;
+    ASSERT_TRUE(parse(R"({"version": 2, "entities": [
+        {"name": "floor", "mesh": {"primitive": {"shape": "plane", "halfSize": 20}}},
+        {"name": "slab", "mesh": {"primitive": {"shape": "box", "halfExtents": [2, 0.05, 2]}}}]})",
+                      s, error))
+        << error;
+    ASSERT_TRUE(applyMeshSdf(s, m_assets, MeshSdfMode::Occlusion, error, 16)) << error;
+    EXPECT_EQ(sdfOf(s, "floor"), nullptr);
+    ASSERT_NE(sdfOf(s, "slab"), nullptr);  // 0.1 / 4 = 2.5 % thick: not flat
+    EXPECT_EQ(m_assets.cacheStats().sdfBakes, 1u);
+    unloadScene(s, m_assets);
+    EXPECT_EQ(m_assets.count(), 0u);
+}
+
 // Criterion: Auto is Occlusion exactly when the settings turn on an effect meshes can occlude
 // (shadows enabled with a shadow-casting light, or an AO variant) and a visible mesh exists;
 // otherwise Off (nothing baked). Off, Trace and Occlusion resolve to themselves.

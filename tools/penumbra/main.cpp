@@ -29,6 +29,7 @@
 #include "engine/engine.h"
 #include "engine/image/image.h"
 #include "engine/scene/demo_scene.h"
+#include "engine/scene/mesh_sdf.h"
 #include "renderer/renderer.h"
 #include "rhi/device.h"
 
@@ -89,8 +90,9 @@ int runInfo(const DeviceOptions& opt) {
     fmt::print("  timestamps       {} (period {} ns)\n", l.timestamps ? "yes" : "no", l.timestampPeriodNs);
     fmt::print("  conservative depth {}\n", l.conservativeDepth ? "yes" : "no");
     fmt::print("  subgroups        size {}, ops {}\n", l.subgroupSize, rhi::toString(l.subgroupOps));
-    fmt::print("enabled features   {}\n",
-               info.enabledFeatures.empty() ? "none" : fmt::format("{}", fmt::join(info.enabledFeatures, " ")));
+    fmt::print("enabled features   {}\n", info.enabledFeatures.empty()
+                                              ? "none"
+                                              : fmt::format("{}", fmt::join(info.enabledFeatures, " ")));
     fmt::print("formats\n");
     for (uint32_t f = 1; f < uint32_t(rhi::Format::Count); ++f)
         fmt::print("  {:<16} {}\n", rhi::formatInfo(rhi::Format(f)).name,
@@ -130,7 +132,10 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
     // The built-in demo scene (engine/scene/demo_scene.h) through the scene renderer: the same
     // frame path as `penumbra render`.
     std::unique_ptr<penumbra::Engine> engine = penumbra::Engine::create({}, err);
-    if (!engine || !penumbra::scene::buildDemoScene(engine->assets(), engine->scene(), err)) {
+    // Its meshes cast shadows and AO through baked occlusion fields, as any scene's do by default
+    // (render.meshSdf auto: docs/FORMATS.md).
+    if (!engine || !penumbra::scene::buildDemoScene(engine->assets(), engine->scene(), err) ||
+        !penumbra::scene::applyMeshSdf(engine->scene(), engine->assets(), engine->settings().meshSdf, err)) {
         penumbra::log::error("demo: {}", err);
         return 1;
     }
