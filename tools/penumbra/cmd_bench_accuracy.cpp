@@ -881,9 +881,10 @@ const std::vector<AccuracyMetricInfo>& accuracyMetrics() {
 CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
     CLI::App* cmd = group.add_subcommand(
         "accuracy",
-        "Speed against error (docs/ACCURACY.md): sweeps the SDF trace settings around the medium preset on "
-        "each scene and backend, compares the depth / normal / ids AOVs with the CPU reference and writes "
-        "DIR/accuracy.csv, DIR/accuracy.md (Pareto fronts) and DIR/<pass>_<metric>.png plots");
+        "Speed against error (docs/ACCURACY.md): sweeps the SDF trace settings around the medium preset, "
+        "and the shadow and AO settings, on each scene and backend, compares the depth / normal / ids, "
+        "shadow and AO AOVs with the CPU reference and writes DIR/accuracy.csv, DIR/accuracy.md (Pareto "
+        "fronts) and DIR/<pass>_<metric>.png plots");
     cmd->add_option("-o,--output", opt.outputDir,
                     "Output folder: accuracy.csv, accuracy.md, <pass>_<metric>.png")
         ->required();
