@@ -8,7 +8,8 @@
 //  3. the variant (default five-tap, MULTI_RAY, CONES) computes the occlusion in [0, 1] and a bent
 //     normal; the result is AO = 1 - strength * occlusion.
 // Rays and taps start `offset` above the surface along the normal (a few pixel footprints: the
-// G-buffer point lies up to the trace's hit epsilon in front of the surface).
+// G-buffer point lies up to the trace's hit epsilon in front of the surface; near a field at least
+// the shadows' surface bias, sdf_cone.glsl).
 #version 450
 #pragma penumbra_variants MULTI_RAY CONES SDF_FIELDS MULTI_RAY+SDF_FIELDS CONES+SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -23,6 +24,7 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SDF_FIELDS_BINDING 8
 #define SDF_ATLAS_BINDING 9
 #include "sdf_scene.glsl"
+#include "sdf_cone.glsl"
 
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 1) uniform sampler2D gbufferNormal;
@@ -87,7 +89,7 @@ float fiveTapOcclusion(vec3 o, vec3 dir, float cosTheta) {
         norm += w * e;
         w *= 0.5;
     }
-    return occ / norm;
+    return norm > 0.0 ? occ / norm : 0.0;  // maxDistance 0 (API only): nothing occludes, not 0 / 0
 }
 
 // Exact binary visibility of the ray o + t dir, t in (0, maxDistance]: sphere tracing over the
@@ -186,9 +188,12 @@ void main() {
     vec3 n = octDecode(texelFetch(gbufferNormal, pixel, 0).rg);
     vec3 p = effectsWorldPosition(pixel, depth);
     float footprint = ao.params.w * depth;
-    // Start above the surface: a few hit epsilons (the trace stops up to one in front of it), and
-    // enough float ulps of the point's coordinates.
-    float offset = max(4.0 * ao.eps.x * footprint, 2e-5 * max(1.0, length(p)));
+    // Start above the surface: a few hit epsilons (the trace stops up to one in front of it), the
+    // shadows' surface bias (1.5 voxels near a field: its safe distance lies up to an interpolation
+    // bound below the traced surface, which at small hit epsilons — the reference preset — made
+    // every cone start inside and see full occlusion), and enough float ulps of the coordinates.
+    float offset = max(max(4.0 * ao.eps.x * footprint, sdfSurfaceBias(p, footprint, ao.counts.x)),
+                       2e-5 * max(1.0, length(p)));
     vec3 o = p + n * offset;
     cullObjects(p);
 
