@@ -65,16 +65,21 @@ float traceThickness(uint obj, vec3 p, vec3 dir, float eps, float cap) {
     float t = eps;  // the G-buffer point lies within the trace's epsilon of the surface
     float lastStep = eps;
     bool entered = false;
+    // A field's conservative inside distance (distance plus the interpolation bound) turns
+    // negative only up to about a voxel below the traced surface: the march enters within that
+    // (in steps of at most half a voxel) before it gives up.
+    float voxel = sdfObjectVoxel(obj);
+    float enterWithin = 4.0 * eps + 2.0 * voxel;
     for (uint i = 0u; i < pc.counts.y; ++i) {
         float d = insideDistance(obj, p + dir * t);
         if (d < 0.0) {
             entered = true;
         } else if (entered) {
             return clamp(t - min(d, lastStep), 0.0, cap);  // left the solid within the last step
-        } else if (t > 4.0 * eps) {
+        } else if (t > enterWithin) {
             return 0.0;  // never got in: a sheet thinner than the epsilon
         }
-        lastStep = max(abs(d), eps);
+        lastStep = entered ? max(abs(d), eps) : max(min(abs(d), 0.5 * voxel), eps);
         t += lastStep;
         if (t >= cap) return cap;
     }
