@@ -31,7 +31,7 @@
 //                                  meshes and the background (sdf_surface's object lookup; shadow
 //                                  and AO have their own targets, renderer/features/effects.h)
 // mTec keeps an 8-bit id and an 8-bit SSS thickness in the r, g bytes; here the id takes both, and
-// subsurface thickness (no pass computes it yet) will need its own target when it arrives.
+// subsurface thickness has its own target (effects.thickness, renderer/features/effects.h).
 // plus, outside the 96 bits (as in mTec: "other buffers"):
 //   gbuffer.velocity  RG16_FLOAT   screen-space motion to the previous frame, in pixels
 //   gbuffer.albedo    RGBA8_UNORM  base colour x texture, sRGB-encoded by the shaders (a UNORM target so
