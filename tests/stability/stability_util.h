@@ -293,6 +293,125 @@ inline Hit rayBox(const glm::dvec3& o, const glm::dvec3& d, const glm::dvec3& c,
     return h;
 }
 
+// ---- shadows (renderer/features/sdf_shadow.h) ---------------------------------------------------------
+
+// A directional light toward the unit vector `toLight` (it travels along -toLight); angular radius 0
+// gives a binary (hard) shadow. Layers of effects.shadow follow the shadowed lights' entity order.
+inline ecs::Entity directionalLight(StabScene& s, const glm::dvec3& toLight, float angularRadius) {
+    const ecs::Entity e = s.world.create();
+    s.world.add<ecs::Transform>(e)->rotation = lookRotation(-glm::vec3(toLight));
+    ecs::Light l;
+    l.type = ecs::LightType::Directional;
+    l.angularRadius = angularRadius;
+    s.world.add<ecs::Light>(e, l);
+    return e;
+}
+// The unit direction toward a directional light as the renderer uploads it (transforms updated).
+inline glm::dvec3 towardLight(const StabScene& s, ecs::Entity light) {
+    return -glm::normalize(glm::dvec3(s.world.get<ecs::Transform>(light)->worldForward()));
+}
+
+// effects.shadow (R8_UNORM, layer k at columns [k w, (k + 1) w)) read after a frame rendered with
+// ShadowSettings::resolutionScale 1.
+struct ShadowStrip {
+    uint32_t w = 0, h = 0, layers = 0;
+    std::vector<uint8_t> texels;
+    double at(uint32_t layer, uint32_t x, uint32_t y) const {
+        return texels[size_t(y) * w * layers + size_t(layer) * w + x] / 255.0;
+    }
+};
+inline bool readShadow(render::SceneRenderer& r, uint32_t w, uint32_t h, uint32_t layers, ShadowStrip& out) {
+    out = {w, h, layers, readRaw(r, "effects.shadow", rhi::Format::R8_UNORM)};
+    EXPECT_EQ(out.texels.size(), size_t(w) * h * layers) << "effects.shadow";
+    return out.texels.size() == size_t(w) * h * layers;
+}
+
+// Signed distance from p to the axis-aligned box (centre c, half extents e).
+inline double boxDistance(const glm::dvec3& p, const glm::dvec3& c, const glm::dvec3& e) {
+    const glm::dvec3 q = glm::abs(p - c) - e;
+    return glm::length(glm::max(q, glm::dvec3(0.0))) + std::min(std::max(q.x, std::max(q.y, q.z)), 0.0);
+}
+// Signed clearance of the segment o + t l, t in [t0, t1], from that box: the minimum of its signed
+// distance along the segment (> 0: the segment misses the box by that much; < 0: it enters it). A
+// convex set's signed distance is convex along a line, so a ternary search finds the minimum.
+inline double segmentBoxClearance(const glm::dvec3& o, const glm::dvec3& l, double t0, double t1,
+                                  const glm::dvec3& c, const glm::dvec3& e) {
+    double a = t0, b = t1;
+    for (int i = 0; i < 200 && b - a > 1e-12 * (1.0 + std::abs(b)); ++i) {
+        const double m1 = a + (b - a) / 3.0, m2 = b - (b - a) / 3.0;
+        if (boxDistance(o + m1 * l, c, e) < boxDistance(o + m2 * l, c, e))
+            b = m2;
+        else
+            a = m1;
+    }
+    return std::min({boxDistance(o + 0.5 * (a + b) * l, c, e), boxDistance(o + t0 * l, c, e),
+                     boxDistance(o + t1 * l, c, e)});
+}
+
+// A pixel traced at the near plane: its ray started inside a solid (the point is not on the receiver's
+// surface, and a shadow ray from inside a solid is rightly blocked), so shadow comparisons skip it.
+inline bool nearPlaneHit(const GBuffer& g, const RefCamera& cam, size_t i) {
+    return double(g.depth[i]) <= cam.nearPlane * (1.0 + 1e-4);
+}
+
+// Light leaking through a thin wall: a box (local half extents `half`, placed by the rigid matrix
+// `wallModel`) between a directional light (toward `toLight`, angular radius `angularRadius`) and the
+// receiver pixels (entity `receiverId`) on the camera side. The light ray from the traced point p
+// crosses the wall's mid-plane at t: "umbra" when the crossing lies inside the wall's outline by more
+// than (t tan(angularRadius) + 2 pixel footprints at p) / cos(incidence) (the whole light disc is
+// hidden: exact visibility 0), "lit" when outside it by more than that or when the ray leaves away
+// from the wall (exact visibility 1); the band between is not counted, nor receivers whose ray meets
+// the wall within 4 pixel footprints (the pass starts its rays 2 footprints + a bias off the surface),
+// nor pixels traced at the near plane (nearPlaneHit).
+struct WallShadowStats {
+    size_t umbra = 0, umbraOver = 0;  // umbra pixels; those with visibility > 0.5
+    size_t lit = 0, litDark = 0;      // lit pixels; those with visibility < 0.5
+    double umbraMean = 0, umbraMax = 0, litMean = 0;
+};
+inline WallShadowStats wallShadow(const GBuffer& g, const RefCamera& cam, int receiverId,
+                                  const glm::dmat4& wallModel, const glm::dvec3& half,
+                                  const ShadowStrip& strip, uint32_t layer, const glm::dvec3& toLight,
+                                  double angularRadius) {
+    WallShadowStats st;
+    const glm::dmat4 inv = glm::inverse(wallModel);
+    const glm::dvec3 ll = glm::dmat3(inv) * toLight;
+    for (uint32_t y = 0; y < g.h; ++y)
+        for (uint32_t x = 0; x < g.w; ++x) {
+            const size_t i = g.at(x, y);
+            if (!g.hit(i) || g.id(i) != receiverId || nearPlaneHit(g, cam, i)) continue;
+            const glm::dvec3 d = cam.dir(x, y);
+            const glm::dvec3 p = cam.eye + d * double(g.depth[i]);
+            const double pixelSize = cam.footprint() * double(g.depth[i]) * glm::length(d);
+            const glm::dvec3 lo(inv * glm::dvec4(p, 1.0));
+            const double v = strip.at(layer, x, y);
+            const double t = std::abs(ll.z) > 1e-9 ? -lo.z / ll.z : -1.0;
+            bool lit = t <= 0.0, umbra = false;
+            if (!lit) {
+                if (t < 4.0 * pixelSize) continue;
+                const glm::dvec3 q = lo + t * ll;
+                const double r = (t * std::tan(angularRadius) + 2.0 * pixelSize) / std::abs(ll.z);
+                const double inner = std::min(half.x - std::abs(q.x), half.y - std::abs(q.y));
+                const double outside = glm::length(glm::max(
+                    glm::dvec2(std::abs(q.x), std::abs(q.y)) - glm::dvec2(half.x, half.y), glm::dvec2(0.0)));
+                umbra = inner > r;
+                lit = outside > r;
+            }
+            if (umbra) {
+                ++st.umbra;
+                st.umbraOver += v > 0.5;
+                st.umbraMean += v;
+                st.umbraMax = std::max(st.umbraMax, v);
+            } else if (lit) {
+                ++st.lit;
+                st.litDark += v < 0.5;
+                st.litMean += v;
+            }
+        }
+    if (st.umbra) st.umbraMean /= double(st.umbra);
+    if (st.lit) st.litMean /= double(st.lit);
+    return st;
+}
+
 // Relative depth error |a - b| / b.
 inline double relErr(double a, double b) { return std::abs(a - b) / std::abs(b); }
 
