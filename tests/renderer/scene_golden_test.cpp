@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 
 #include "engine/engine.h"
+#include "engine/scene/mesh_sdf.h"
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
 #include "support/test_device.h"
@@ -60,7 +61,11 @@ Rendered renderScene(rhi::Device& device, const SceneCase& sc) {
     // The default scene bakes three meshes on load: the tests share one (validated) bake cache.
     desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";
     auto engine = Engine::create(desc, r.error);
-    if (!engine || !engine->loadScene(path, r.error)) return r;
+    // As `penumbra render` does: the scene's render.meshSdf (auto: meshes get occlusion fields when
+    // the frame has shadows or AO).
+    if (!engine || !engine->loadScene(path, r.error) ||
+        !scene::applyMeshSdf(engine->scene(), engine->assets(), engine->settings().meshSdf, r.error))
+        return r;
     std::string loopError;
     engine->loop().configure({0.1, 16}, loopError);
     engine->update(0.0);
