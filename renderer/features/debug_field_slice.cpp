@@ -23,9 +23,7 @@ void addDebugFieldSlice(FrameContext& fc, const FieldSliceDesc& desc) {
     const auto variant = fields ? program::Variant::SdfFields : program::Variant::Default;
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
-    rhi::SamplerDesc linear;  // as sdf_trace samples the atlas: trilinear, clamped
-    linear.debugName = "sdf.atlas";
-    const rhi::SamplerHandle sampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
     const program::PushConstants push{
         glm::uvec4(sdfScene.objectCount, 0, 0, 0), desc.plane,
         glm::vec4(kFieldSliceIsoSpacing, desc.fieldSafety, desc.nearPlane, desc.farPlane)};
@@ -36,22 +34,13 @@ void addDebugFieldSlice(FrameContext& fc, const FieldSliceDesc& desc) {
             d.sdf = sdfScene;
             d.output = b.write(fc.board.find<Output>()->color, rhi::Access::ColorTarget);
             b.read(d.scene.view, rhi::Access::UniformRead);
-            b.read(d.sdf.objects, rhi::Access::ShaderRead);
-            b.read(d.sdf.records, rhi::Access::ShaderRead);
-            if (fields) {
-                b.read(d.sdf.fields, rhi::Access::ShaderRead);
-                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
-            }
+            readSdfScene(b, d.sdf);
         },
-        [&cache = fc.cache, prog, sampler, push, fields](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, prog, sampler, push](const Data& d, fg::PassContext& ctx) {
             beginFullscreen(ctx, d.output, prog.pipeline, "debug_field_slice");
             ShaderParams params(*prog.vertex, *prog.fragment);
-            params.set("View", ctx.buffer(d.scene.view))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records));
-            if (fields)
-                params.set("SdfFields", ctx.buffer(d.sdf.fields))
-                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), sampler);
+            params.set("View", ctx.buffer(d.scene.view));
+            setSdfScene(params, ctx, d.sdf, sampler);
             ctx.cmd.pushConstants(&push, sizeof(push));
             drawFullscreen(ctx, params, cache, prog.pipeline);
         });

@@ -4,6 +4,7 @@
 #include <shaders/effects_upsample.h>
 
 #include "renderer/core/shader_params.h"
+#include "renderer/features/fullscreen.h"
 
 namespace penumbra::render {
 
@@ -22,10 +23,7 @@ void addEffectsUpsample(FrameContext& fc, const EffectsDesc&) {
     const V variant = shadow && ao ? V::ShadowAo : shadow ? V::Shadow : V::Ao;
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    rhi::SamplerDesc nearest;
-    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    nearest.debugName = "effects_upsample.nearest";
-    const rhi::SamplerHandle sampler = fc.cache.sampler(nearest);
+    const rhi::SamplerHandle sampler = gbufferSampler(fc.cache);
     const program::PushConstants push{
         glm::uvec4(low.shadowWidth, low.shadowHeight, low.aoWidth, low.aoHeight),
         glm::uvec4(fc.width, fc.height, shadow ? effects.shadowLayers : 0u, 0u)};
@@ -56,7 +54,9 @@ void addEffectsUpsample(FrameContext& fc, const EffectsDesc&) {
             if (shadow)
                 params.setStorage("lowShadowImage", ctx.texture(d.lowShadow))
                     .setStorage("shadowImage", ctx.texture(d.shadow));
-            if (ao) params.setStorage("lowAoImage", ctx.texture(d.lowAo)).setStorage("aoImage", ctx.texture(d.ao));
+            if (ao)
+                params.setStorage("lowAoImage", ctx.texture(d.lowAo))
+                    .setStorage("aoImage", ctx.texture(d.ao));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);

@@ -11,10 +11,15 @@ FullscreenProgram fullscreenProgram(FrameContext& fc, const rhi::ShaderDesc& ver
     pd.colorFormats = {fc.board.find<Output>()->srgbTarget ? rhi::Format::RGBA8_SRGB
                                                            : rhi::Format::RGBA8_UNORM};
     p.pipeline = fc.cache.graphicsPipeline(vertex, fragment, pd);
+    p.nearest = gbufferSampler(fc.cache);
+    return p;
+}
+
+rhi::SamplerHandle gbufferSampler(GpuCache& cache) {
     rhi::SamplerDesc nearest;
     nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    p.nearest = fc.cache.sampler(nearest);
-    return p;
+    nearest.debugName = "gbuffer.nearest";
+    return cache.sampler(nearest);
 }
 
 void readGBuffer(fg::PassBuilder& b, const GBuffer& gb) {

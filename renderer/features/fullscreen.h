@@ -16,6 +16,8 @@ struct FullscreenProgram {
 };
 FullscreenProgram fullscreenProgram(FrameContext& fc, const rhi::ShaderDesc& vertex,
                                     const rhi::ShaderDesc& fragment);
+// The nearest (point) sampler for G-buffer texel fetches, shared by full-screen and compute passes.
+rhi::SamplerHandle gbufferSampler(GpuCache& cache);
 
 // Declares the frame's G-buffer targets (albedo when present) as sampled reads of the pass.
 void readGBuffer(fg::PassBuilder& b, const GBuffer& gb);

@@ -9,6 +9,7 @@
 
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
+#include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -50,13 +51,8 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     const bool fields = sdfScene.atlas.isValid();
     const rhi::ShaderDesc& cs = program::compute(aoVariant(desc.ao.variant, fields));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    rhi::SamplerDesc linear;  // trilinear field sampling (slots are sampled inside)
-    linear.debugName = "sdf.atlas";
-    const rhi::SamplerHandle atlasSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
-    rhi::SamplerDesc nearestDesc;
-    nearestDesc.minFilter = nearestDesc.magFilter = rhi::Filter::Nearest;
-    nearestDesc.debugName = "sdf_ao.gbuffer";
-    const rhi::SamplerHandle nearest = fc.cache.sampler(nearestDesc);
+    const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
+    const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
 
     const float scale = std::clamp(desc.ao.resolutionScale, 0.0f, 1.0f);
     const bool full = scale >= 1.0f;
@@ -86,26 +82,17 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
             }
             b.write(d.out, rhi::Access::ShaderWrite);
             b.read(d.scene.view, rhi::Access::UniformRead);
-            b.read(d.sdf.objects, rhi::Access::ShaderRead);
-            b.read(d.sdf.records, rhi::Access::ShaderRead);
-            if (fields) {
-                b.read(d.sdf.fields, rhi::Access::ShaderRead);
-                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
-            }
+            readSdfScene(b, d.sdf);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h, fields](const Data& d,
-                                                                                      fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h](const Data& d,
+                                                                              fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records))
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("aoImage", ctx.texture(d.out));
-            if (fields)
-                params.set("SdfFields", ctx.buffer(d.sdf.fields))
-                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), atlasSampler);
+            setSdfScene(params, ctx, d.sdf, atlasSampler);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, w, h);

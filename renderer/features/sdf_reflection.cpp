@@ -4,6 +4,7 @@
 #include <shaders/sdf_reflection.h>
 
 #include "renderer/core/shader_params.h"
+#include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -21,12 +22,8 @@ void addSdfReflection(FrameContext& fc, const EffectsDesc& desc) {
     const rhi::ShaderDesc& cs =
         program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    rhi::SamplerDesc nearest;  // G-buffer texel fetches
-    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    const rhi::SamplerHandle point = fc.cache.sampler(nearest);
-    rhi::SamplerDesc linear;  // trilinear field sampling, clamped
-    linear.debugName = "sdf.atlas";
-    const rhi::SamplerHandle fieldSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const rhi::SamplerHandle point = gbufferSampler(fc.cache);
+    const rhi::SamplerHandle fieldSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const scene::TraceSettings& t = desc.trace;
     const program::PushConstants push{glm::uvec4(sdfScene.objectCount, desc.reflections.maxSteps,
                                                  desc.shadows.hard ? 1u : 0u, desc.shadows.maxSteps),
@@ -44,32 +41,23 @@ void addSdfReflection(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.materials, rhi::Access::ShaderRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
-            b.read(d.sdf.objects, rhi::Access::ShaderRead);
-            b.read(d.sdf.records, rhi::Access::ShaderRead);
-            if (fields) {
-                b.read(d.sdf.fields, rhi::Access::ShaderRead);
-                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
-            }
+            readSdfScene(b, d.sdf);
             for (fg::TextureRef tex : {d.gb.depth, d.gb.normal, d.gb.material})
                 b.read(tex, rhi::Access::ShaderSampled);
         },
-        [&cache = fc.cache, &cs, pipeline, point, fieldSampler, push, width, height, fields](
-            const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, point, fieldSampler, push, width, height](const Data& d,
+                                                                                     fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("Scene", ctx.buffer(d.scene.scene))
                 .set("Materials", ctx.buffer(d.scene.materials))
                 .set("Lights", ctx.buffer(d.scene.lights))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records))
                 .set("gbufferDepth", ctx.texture(d.gb.depth), point)
                 .set("gbufferNormal", ctx.texture(d.gb.normal), point)
                 .set("gbufferMaterial", ctx.texture(d.gb.material), point)
                 .setStorage("reflectionImage", ctx.texture(d.reflection));
-            if (fields)
-                params.set("SdfFields", ctx.buffer(d.sdf.fields))
-                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), fieldSampler);
+            setSdfScene(params, ctx, d.sdf, fieldSampler);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);

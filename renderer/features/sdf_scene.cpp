@@ -91,4 +91,27 @@ void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
         });
 }
 
+rhi::SamplerHandle sdfAtlasSampler(GpuCache& cache, const SdfSceneBuffers& sdf) {
+    if (!sdf.atlas.isValid()) return {};
+    rhi::SamplerDesc linear;  // trilinear, clamped (slots are sampled inside)
+    linear.debugName = "sdf.atlas";
+    return cache.sampler(linear);
+}
+
+void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf) {
+    b.read(sdf.objects, rhi::Access::ShaderRead);
+    b.read(sdf.records, rhi::Access::ShaderRead);
+    if (sdf.atlas.isValid()) {
+        b.read(sdf.fields, rhi::Access::ShaderRead);
+        b.read(sdf.atlas, rhi::Access::ShaderSampled);
+    }
+}
+
+void setSdfScene(ShaderParams& params, const fg::PassContext& ctx, const SdfSceneBuffers& sdf,
+                 rhi::SamplerHandle atlasSampler) {
+    params.set("SdfObjects", ctx.buffer(sdf.objects)).set("ShapeRecords", ctx.buffer(sdf.records));
+    if (sdf.atlas.isValid())
+        params.set("SdfFields", ctx.buffer(sdf.fields)).set("sdfAtlas", ctx.texture(sdf.atlas), atlasSampler);
+}
+
 }  // namespace penumbra::render

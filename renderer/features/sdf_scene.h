@@ -18,6 +18,7 @@
 #include <glm/vec4.hpp>
 
 #include "engine/sdf/shape_program.h"
+#include "renderer/core/shader_params.h"
 #include "renderer/features/frame_context.h"
 
 namespace penumbra::render {
@@ -68,5 +69,14 @@ float smallestSingularValue(const glm::mat3& m);
 // Adds the "sdf_upload" pass and publishes SdfSceneBuffers. `data` must stay alive and unchanged
 // until the graph has executed.
 void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data);
+
+// What every pass that evaluates the SDF scene (trace, effects, field slice) declares and binds.
+// The atlas' trilinear, clamped sampler; invalid when the frame has no field (no atlas).
+rhi::SamplerHandle sdfAtlasSampler(GpuCache& cache, const SdfSceneBuffers& sdf);
+// Declares objects and records (and, in field frames, the field table and atlas) as shader reads.
+void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf);
+// Sets SdfObjects and ShapeRecords (and, in field frames, SdfFields and sdfAtlas with atlasSampler).
+void setSdfScene(ShaderParams& params, const fg::PassContext& ctx, const SdfSceneBuffers& sdf,
+                 rhi::SamplerHandle atlasSampler);
 
 }  // namespace penumbra::render

@@ -10,6 +10,7 @@
 
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
+#include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -30,13 +31,6 @@ ShadowSize shadowSize(const FrameContext& fc, float resolutionScale) {
             std::max(1u, uint32_t(std::lround(float(fc.height) * scale))), false};
 }
 
-rhi::SamplerHandle nearestSampler(GpuCache& cache) {
-    rhi::SamplerDesc d;
-    d.minFilter = d.magFilter = rhi::Filter::Nearest;
-    d.debugName = "sdf_shadow.gbuffer";
-    return cache.sampler(d);
-}
-
 }  // namespace
 
 void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
@@ -51,10 +45,8 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     const rhi::ShaderDesc& cs =
         program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    rhi::SamplerDesc linear;  // trilinear field sampling, as the trace
-    linear.debugName = "sdf.atlas";
-    const rhi::SamplerHandle atlasSampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
-    const rhi::SamplerHandle nearest = nearestSampler(fc.cache);
+    const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
+    const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
     const ShadowSize size = shadowSize(fc, desc.shadows.resolutionScale);
     const uint32_t layers = desc.shadowLayers;
     const program::PushConstants push{
@@ -83,28 +75,19 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
-            b.read(d.sdf.objects, rhi::Access::ShaderRead);
-            b.read(d.sdf.records, rhi::Access::ShaderRead);
-            if (fields) {
-                b.read(d.sdf.fields, rhi::Access::ShaderRead);
-                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
-            }
+            readSdfScene(b, d.sdf);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers, fields](
-            const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers](const Data& d,
+                                                                                      fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("Scene", ctx.buffer(d.scene.scene))
                 .set("Lights", ctx.buffer(d.scene.lights))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records))
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("shadowImage", ctx.texture(d.out));
-            if (fields)
-                params.set("SdfFields", ctx.buffer(d.sdf.fields))
-                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), atlasSampler);
+            setSdfScene(params, ctx, d.sdf, atlasSampler);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, size.width, size.height, layers);

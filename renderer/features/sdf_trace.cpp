@@ -25,9 +25,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (fields ? 4 : 0)];
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    rhi::SamplerDesc linear;  // trilinear field sampling, clamped (slots are sampled inside)
-    linear.debugName = "sdf.atlas";
-    const rhi::SamplerHandle sampler = fields ? fc.cache.sampler(linear) : rhi::SamplerHandle{};
+    const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
     const scene::TraceSettings& s = desc.settings;
     const program::PushConstants push{
         glm::uvec4(sdfScene.tracedCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
@@ -46,20 +44,13 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 if (t.isValid()) b.write(t, rw);
             b.read(d.scene.view, rhi::Access::UniformRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
-            b.read(d.sdf.objects, rhi::Access::ShaderRead);
-            b.read(d.sdf.records, rhi::Access::ShaderRead);
-            if (fields) {
-                b.read(d.sdf.fields, rhi::Access::ShaderRead);
-                b.read(d.sdf.atlas, rhi::Access::ShaderSampled);
-            }
+            readSdfScene(b, d.sdf);
         },
-        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, fields](
-            const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux](const Data& d,
+                                                                                      fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records))
                 .setStorage("gbufferDepthImage", ctx.texture(d.gb.depth))
                 .setStorage("gbufferNormalImage", ctx.texture(d.gb.normal))
                 .setStorage("gbufferMaterialImage", ctx.texture(d.gb.material))
@@ -68,9 +59,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 params.set("Materials", ctx.buffer(d.scene.materials))
                     .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
             if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
-            if (fields)
-                params.set("SdfFields", ctx.buffer(d.sdf.fields))
-                    .set("sdfAtlas", ctx.texture(d.sdf.atlas), sampler);
+            setSdfScene(params, ctx, d.sdf, sampler);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);
