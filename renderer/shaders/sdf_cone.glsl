@@ -141,21 +141,28 @@ float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sin
     if (tMax <= tMin || !sdfConeCull(origin, dir, tMin, tMax, tanHalf, epsilon, objectCount)) return 1.0;
     float xMin = 1.0;
     float t = tMin;
+    float d = 3.0e38;
     for (uint step = 0u; step < maxSteps && t < tMax; ++step) {
-        float d = sdfConeDistance(origin + dir * t, t, fieldSafety);
+        d = sdfConeDistance(origin + dir * t, t, fieldSafety);
         if (hard) {
             if (d < epsilon) return 0.0;
             t += max(d, epsilon);
             continue;
         }
         float radius = t * s;  // from the axis point to the cone's surface
-        xMin = min(xMin, d / max(radius, 1e-30));
+        // Outside an occluder the cone counts as at least epsilon wide: near its apex a step of
+        // epsilon could otherwise jump a wall thinner than that unseen (d / radius stays large while
+        // the radius is tiny). Inside (d < 0) the true radius keeps a thin wall's umbra dark.
+        xMin = min(xMin, d / (d > 0.0 ? max(radius, epsilon) : max(radius, 1e-30)));
         if (xMin <= -1.0) return 0.0;
         // Plain sphere-tracing steps outside; inside an occluder |d| (the way out) still never
         // skips a deeper point by more than the sampling already does. At least a tenth of the
         // cone's radius and epsilon, so a ray along a surface does not stall.
         t += max(abs(d), max(0.1 * radius, epsilon));
     }
+    // Out of steps while still creeping along a surface (a ray meeting it at a grazing angle takes
+    // ever smaller steps): a hard ray within a few epsilons of it is taken as blocked.
+    if (hard) return t < tMax && d < 4.0 * epsilon ? 0.0 : 1.0;
     return sdfDiscVisible(xMin);
 }
 

@@ -103,7 +103,7 @@ double presetEps(TraceQuality q) { return double(scene::tracePreset(q).hitEpsilo
 // nor pixels traced at the near plane (the plane's bottom rows: rays starting under the plane). Each
 // frame at the preset's shadow step limit (medium: 64) and at 1024. Criteria: no lit receiver
 // shadowed, no shadowed receiver lit, except the wall at 2 degrees with 64 steps: a known limit (step
-// exhaustion counts as visible), light leaking on at most 90 % of its shadowed pixels (measured 84 %).
+// exhaustion near the wall), light leaking on at most 45 % of its shadowed pixels (measured 40 %).
 // Measured 2026-12-02 otherwise (both backends): 0 leaking, 0 wrongly shadowed in every frame.
 TEST_P(Stability, Case01_GrazingRaysAlongAPlaneAndAWall) {
     constexpr uint32_t w = 128, h = 96;
@@ -197,12 +197,13 @@ TEST_P(Stability, Case01_GrazingRaysAlongAPlaneAndAWall) {
                 EXPECT_GT(compared - shadowed, size_t(100));  // both outcomes are compared
                 EXPECT_EQ(dark, 0u) << angles[k] << " deg: lit receivers shadowed";
                 if (wall && k == 0 && steps == 0) {
-                    // Known limit (measured 2026-12-02, both backends: 849 of 1013 shadowed pixels lit, 0
-                    // with 1024 steps): a hard ray meeting the wall at 2 degrees sphere-traces toward it
-                    // in steps shrinking by (1 - sin 2deg) and runs out of the preset's 64 steps before
-                    // its distance drops below epsilon; sdf_cone.glsl then returns visible. Criterion: the
-                    // measured leak, rounded up (a regression shows; a fix passes).
-                    EXPECT_LE(double(leaks), 0.9 * double(shadowed)) << "grazing leak at 64 steps grew";
+                    // Known limit (measured 2026-12-02, both backends: 404 of 1013 shadowed pixels lit, 0
+                    // with 1024 steps; 849 before sdf_cone.glsl took a hard ray that runs out of steps
+                    // within 4 epsilons of a surface as blocked): a hard ray meeting the wall at 2 degrees
+                    // sphere-traces toward it in steps shrinking by (1 - sin 2deg) and may run out of the
+                    // preset's 64 steps farther than that. Criterion: the measured leak, rounded up (a
+                    // regression shows; a fix passes).
+                    EXPECT_LE(double(leaks), 0.45 * double(shadowed)) << "grazing leak at 64 steps grew";
                 } else {
                     EXPECT_EQ(leaks, 0u) << angles[k] << " deg, " << (steps ? steps : 64u)
                                          << " steps: light leaking past the wall";
@@ -299,14 +300,13 @@ TEST_P(Stability, Case02b_AnalyticWallHalfThickness1em3) {
                 EXPECT_LE(ws.umbraMean, 0.01) << "hard light leaking through the wall";
                 EXPECT_EQ(ws.umbraOver, 0u) << "hard light leaking through the wall";
             } else {
-                // Known limits (measured 2026-12-02, both backends, alike at 1024 steps: umbra mean
-                // 0.605 at 0 deg, 0.523 at 60 deg, max 1.0): the cone estimate lets about half the
-                // light through a wall thinner than the cone's cross-section (sdf_cone.glsl), and the
-                // soft march's smallest step (epsilon, half a pixel footprint at the receiver: ~0.018
-                // here) steps over this 0.002 wall where the cone is narrower than that, near the
-                // wall, without a sample within the cone's radius: visibility up to 1. Criterion: the
-                // measured mean, rounded up.
-                EXPECT_LE(ws.umbraMean, 0.65) << "soft light leaking through the wall";
+                // Known limit (measured 2026-12-02, both backends, alike at 1024 steps: umbra mean
+                // 0.565 at 0 deg, 0.505 at 60 deg, max 0.686): the cone estimate lets about half the
+                // light through a wall thinner than the cone's cross-section (sdf_cone.glsl). (Before
+                // the soft march counted the cone as at least epsilon wide outside occluders, its
+                // smallest step, half a pixel footprint, also jumped this 0.002 wall near the apex:
+                // mean 0.605, max 1.0.) Criterion: the measured mean, rounded up.
+                EXPECT_LE(ws.umbraMean, 0.6) << "soft light leaking through the wall";
             }
         }
     }
