@@ -178,8 +178,8 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "Show a debug view instead of the lit image: normals | depth | albedo | steps | ids | "
                     "field-slice | ao | shadow (first shadowed light) | bentnormal | thickness (none: lit; "
                     "replaces the scene's render.debugView; docs/FORMATS.md)")
-        ->check(CLI::IsMember({"none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao", "shadow",
-                               "bentnormal", "thickness"}));
+        ->check(CLI::IsMember({"none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao",
+                               "shadow", "bentnormal", "thickness"}));
     cmd->add_option("--slice", opt.slice,
                     "The field-slice plane: AXIS=OFFSET (x, y or z; e.g. y=0.5) or NX,NY,NZ,OFFSET "
                     "(dot(N / |N|, p) = OFFSET); replaces the scene's render.slice (default y=0)");
@@ -198,6 +198,36 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
     return cmd;
 }
+
+namespace {
+
+// The command line's overrides of the loaded scene's render settings, then the scene's (or the
+// flag's) render.meshSdf, which looks at the effect settings; false with `error` for an unknown
+// --camera.
+bool applySceneOverrides(const RenderOptions& opt, const glm::vec4& slice, Engine& engine,
+                         std::string& error) {
+    scene::RenderSettings& settings = engine.settings();
+    if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
+    if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
+    if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
+    if (!opt.shadows.empty()) {
+        settings.shadows.enabled = opt.shadows != "off";
+        settings.shadows.hard = opt.shadows == "hard";
+    }
+    if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
+    // After the effect overrides: auto looks at them.
+    if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
+    if (!scene::applyMeshSdf(engine.scene(), engine.assets(), settings.meshSdf, error)) return false;
+    if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
+    if (!opt.slice.empty()) settings.slice = slice;
+    if (!opt.camera.empty() && scene::findCamera(engine.world(), opt.camera) == ecs::kNullEntity) {
+        error = fmt::format("the scene has no camera named '{}'", opt.camera);
+        return false;
+    }
+    return true;
+}
+
+}  // namespace
 
 int runRender(const RenderOptions& opt) {
     // Everything that can be checked before the work is checked first: backend, input, outputs.
@@ -246,27 +276,11 @@ int runRender(const RenderOptions& opt) {
         log::error("{}", error);
         return 1;
     }
-    scene::RenderSettings& settings = engine->settings();
-    if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
-    if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
-    if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
-    if (!opt.shadows.empty()) {
-        settings.shadows.enabled = opt.shadows != "off";
-        settings.shadows.hard = opt.shadows == "hard";
-    }
-    if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
-    // After the effect overrides: auto looks at them.
-    if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
-    if (!scene::applyMeshSdf(engine->scene(), engine->assets(), settings.meshSdf, error)) {
+    if (!applySceneOverrides(opt, slice, *engine, error)) {
         log::error("{}: {}", opt.scene, error);
         return 1;
     }
-    if (!opt.debugView.empty()) scene::parseDebugView(opt.debugView, settings.debugView);
-    if (!opt.slice.empty()) settings.slice = slice;
-    if (!opt.camera.empty() && scene::findCamera(engine->world(), opt.camera) == ecs::kNullEntity) {
-        log::error("{}: the scene has no camera named '{}'", opt.scene, opt.camera);
-        return 1;
-    }
+    const scene::RenderSettings& settings = engine->settings();
 
     std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
     if (!renderer) {
