@@ -143,6 +143,20 @@ enum class MeshSdfMode : uint8_t {
     Auto        // Occlusion when the frame has effects (shadowed lights or AO) and meshes, else Off
 };
 
+// ---- acceleration (issue 13: renderer/features/sdf_cull.h, sdf_world_cache.h) -------------------
+// Each toggle only changes speed: the picture matches the unaccelerated render within the parity
+// rule (tests). `render.acceleration` in the scene JSON, `--accel` on the CLI (docs/FORMATS.md).
+struct AccelerationSettings {
+    bool culling = true;     // 8x8 pixel tile lists of objects for the trace, shadows and AO
+    bool worldCache = true;  // clipmapped world distance: long safe steps far from surfaces
+    bool idField = true;     // object-id field: near a surface evaluate the one object it names
+    bool prepass = false;    // coarse-to-fine cone prepass per 8x8 tile (optional)
+    uint32_t cacheLevels = 4;              // clipmap levels (each twice the voxel size of the last)
+    uint32_t cacheResolution = 64;         // voxels per side of each level (multiple of 8)
+    float cacheVoxel = 0.0f;               // level-0 voxel size in world units; 0: from the scene's size
+    uint32_t cacheBudgetVoxels = 1u << 20;  // dirty-region voxels recomputed per frame (rest queued)
+};
+
 struct RenderSettings {
     uint32_t width = 640;
     uint32_t height = 360;
@@ -163,6 +177,7 @@ struct RenderSettings {
     AoSettings ao;
     ReflectionSettings reflections;
     MeshSdfMode meshSdf = MeshSdfMode::Auto;  // --mesh-sdf replaces it
+    AccelerationSettings acceleration;        // --accel replaces the toggles
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };
