@@ -168,6 +168,7 @@ struct SceneRenderer::Impl {
     std::unordered_set<uint64_t> warnedSdfs;  // SDF entities already warned about (once each)
     SdfSceneData sdfData;                     // read by sdf_upload's execute
     SdfAtlas atlas;                           // the fields of the frame's SdfRenderers
+    SdfSceneStore sdfStore;                   // the persistent SDF object array (delta updates)
     uint32_t shadowLayers = 0;                // layers of targets[kShadow]
     uint32_t warnedShadowWidth = 0;           // frame width last warned about for too many shadow layers
     uint32_t frameIndex = 0;
@@ -195,10 +196,12 @@ struct SceneRenderer::Impl {
                 }),
           gpuCache(d),
           cache(d),
-          atlas(d) {}
+          atlas(d),
+          sdfStore(d) {}
 
     ~Impl() {
         for (Target& t : targets) release(t);
+        sdfStore.release(graph);
     }
 
     void release(Target& t) {
@@ -875,7 +878,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     uint64_t transientBytes = 0;
     if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g));
     if (!g.sdfs.empty()) {
-        addSdfSceneUpload(fc, sdfData);
+        addSdfSceneUpload(fc, sdfData, sdfStore);
         SdfTraceDesc trace;
         trace.settings = desc.settings.resolvedTrace();
         trace.raster = !g.sources.empty();
@@ -979,6 +982,10 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
                 atlas.size().z,
                 atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
     if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
+    if (!g.sdfs.empty()) {
+        const SdfSceneStore::Stats& up = sdfStore.stats();
+        st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
+    }
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());

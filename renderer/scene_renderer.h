@@ -87,6 +87,16 @@ struct EffectsReport {
     uint64_t lowResBytes = 0;   // the low-resolution shadow / AO transients (in renderTargets too)
 };
 
+// The SDF object upload of the frame (renderer/features/sdf_scene.h, SdfSceneStore): the object
+// array is persistent and updated from deltas; zeros in a frame without SDF objects.
+struct SdfUploadReport {
+    uint32_t objectsUploaded = 0;    // GpuSdfObject records sent (changed ones, or all on a full rewrite)
+    bool fullUpload = false;         // the whole array was rewritten (new buffer, > half changed)
+    uint64_t deltaBytes = 0;         // the delta buffer scattered by sdf_object_scatter (0: none)
+    uint64_t uploadBytes = 0;        // all bytes sent: objects + shape records + field table
+    uint64_t objectBufferBytes = 0;  // the persistent object buffer (its capacity)
+};
+
 struct FrameStats {
     std::vector<fg::PassTiming> passes;  // executed passes in order
     MemoryReport memory;
@@ -95,6 +105,7 @@ struct FrameStats {
     uint32_t sdfOccluders = 0;  // occluderOnly SdfRenderers (mesh fields seen by shadows and AO only)
     AtlasReport atlas;
     EffectsReport effects;
+    SdfUploadReport sdfUpload;
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;

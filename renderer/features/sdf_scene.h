@@ -1,7 +1,20 @@
 // Feature "sdf_scene": the frame's SDF objects on the GPU (renderer/shaders/sdf_scene.glsl is the
-// shader side). The pass "sdf_upload" (Transfer) writes the per-object array and the shape-program
-// records of this frame into frame-graph buffers and publishes them, with the field atlas of
+// shader side). The pass "sdf_upload" (Transfer) brings the per-object array, the shape-program
+// records and the field table of this frame to the GPU and publishes them, with the field atlas of
 // renderer/features/sdf_atlas.h (when a field is in the frame), as SdfSceneBuffers.
+//
+// With an SdfSceneStore (the scene renderer's) the three arrays live in persistent buffers that
+// are updated from deltas: the CPU compares this frame's objects with the copy it last uploaded,
+// index by index, and only the changed ones travel, in a small transient delta buffer (uint index
+// + the whole 256-byte record each: a moving object changes model, worldToLocal and prevModel,
+// 192 of the 256 bytes, so per-field deltas would save little and cost a second layout), which the
+// compute pass "sdf_object_scatter" (renderer/shaders/sdf_object_scatter.comp) writes into place.
+// A static scene uploads nothing after its first frame. The whole array is written with one plain
+// upload instead when the buffer is new or was resized, or when more than half of the objects
+// changed (a delta entry is 272 bytes against 256 for the record in a full upload: past half the
+// delta saves under half of the bytes and adds a dispatch and a barrier). Records and the field
+// table are compared as a whole and rewritten when they differ. Without a store (the empty upload
+// of debug_field_slice) everything goes into transient buffers every frame.
 //
 // Per object (GpuSdfObject, 256 bytes): world <-> local matrices, the previous model (velocity),
 // the local bounds of its solid, sigma_min (the smallest singular value of the model's 3x3 part:
@@ -66,9 +79,68 @@ struct SdfSceneBuffers {
 // rotations and rounded down: the world distance is at least this times the local distance.
 float smallestSingularValue(const glm::mat3& m);
 
+// The persistent GPU copy of the SDF scene and the CPU copy of what was last uploaded into it.
+// Capacities grow geometrically (at least double) when the frame needs more and shrink (to twice
+// the need) when more than four times larger than needed; a resized buffer is written in full.
+// The CPU copy is updated when the upload pass executes, so a frame whose graph never ran leaves
+// the next frame comparing against what really is on the GPU.
+class SdfSceneStore {
+public:
+    explicit SdfSceneStore(rhi::Device& device) : m_device(device) {}
+    ~SdfSceneStore();
+    SdfSceneStore(const SdfSceneStore&) = delete;
+    SdfSceneStore& operator=(const SdfSceneStore&) = delete;
+
+    // What the last addSdfSceneUpload with this store sends and holds.
+    struct Stats {
+        uint32_t objectsUploaded = 0;    // records written into the object buffer (delta or full)
+        bool fullUpload = false;         // the whole object array was rewritten
+        bool recordsUploaded = false;    // shape records rewritten
+        bool fieldsUploaded = false;     // field table rewritten
+        uint64_t deltaBytes = 0;         // the transient delta buffer (0: no scatter this frame)
+        uint64_t uploadBytes = 0;        // every byte sent: objects (delta or full) + records + fields
+        uint64_t objectBufferBytes = 0;  // the persistent object buffer (capacity)
+        uint64_t persistentBytes = 0;    // objects + records + field table buffers
+    };
+    const Stats& stats() const { return m_stats; }
+    rhi::BufferHandle objectBuffer() const { return m_objects.handle; }  // GpuSdfObject[capacity]
+    uint32_t objectCapacity() const { return uint32_t(m_objects.capacity / sizeof(GpuSdfObject)); }
+    // Destroys the buffers (forgotten by `graph`): the next frame uploads everything.
+    void release(fg::FrameGraph& graph);
+
+private:
+    friend void addSdfSceneUpload(FrameContext&, const SdfSceneData&, SdfSceneStore&);
+    struct Buffer {
+        rhi::BufferHandle handle;
+        uint64_t capacity = 0;        // bytes
+        std::vector<uint8_t> shadow;  // what the GPU copy holds (bytes [0, shadow.size()))
+    };
+    // Compares `data` with the uploaded copies and fills this frame's plan and stats; false when a
+    // buffer could not be created.
+    bool plan(fg::FrameGraph& graph, const SdfSceneData& data);
+    // "sdf_upload" (and "sdf_object_scatter") for the plan; publishes SdfSceneBuffers.
+    void addPasses(FrameContext& fc, const SdfSceneData& data);
+    // Makes `b` hold `bytes` (resizing as described above); true when it was (re)created.
+    bool reserve(fg::FrameGraph& graph, Buffer& b, uint64_t bytes, const char* name);
+    void destroy(fg::FrameGraph& graph, Buffer& b);
+
+    rhi::Device& m_device;
+    Buffer m_objects, m_records, m_fields;
+    // This frame's plan, read by the passes' execute callbacks.
+    std::vector<uint32_t> m_changed;  // object indices to scatter (ascending)
+    std::vector<glm::uvec4> m_delta;  // 17 uvec4 per changed object (index, record)
+    bool m_fullObjects = false, m_writeRecords = false, m_writeFields = false;
+    const void* m_recordData = nullptr;  // the frame's records (or one zero record)
+    uint64_t m_recordBytes = 0;
+    Stats m_stats;
+};
+
 // Adds the "sdf_upload" pass and publishes SdfSceneBuffers. `data` must stay alive and unchanged
-// until the graph has executed.
+// until the graph has executed. Without a store: transient buffers written in full.
 void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data);
+// With a store: the persistent buffers, updated from deltas ("sdf_object_scatter" when only some
+// objects changed); `store` must outlive the graph's execution.
+void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data, SdfSceneStore& store);
 
 // What every pass that evaluates the SDF scene (trace, effects, field slice) declares and binds.
 // The atlas' trilinear, clamped sampler; invalid when the frame has no field (no atlas).

@@ -578,6 +578,21 @@ rhi::Access FrameGraph::persistentState(rhi::TextureHandle texture) const {
 
 void FrameGraph::forgetPersistent(rhi::TextureHandle texture) { m_persistent.erase(texture.value); }
 
+BufferRef FrameGraph::importPersistent(std::string name, rhi::BufferHandle buffer, rhi::Access finalState) {
+    auto it = m_persistentBuffers.find(buffer.value);
+    const rhi::Access current = it == m_persistentBuffers.end() ? Access::None : it->second;
+    BufferRef ref = importBuffer(std::move(name), buffer, current, finalState);
+    if (ref.isValid()) m_persistentBuffers[buffer.value] = current;  // updated by compile()
+    return ref;
+}
+
+rhi::Access FrameGraph::persistentState(rhi::BufferHandle buffer) const {
+    auto it = m_persistentBuffers.find(buffer.value);
+    return it == m_persistentBuffers.end() ? Access::None : it->second;
+}
+
+void FrameGraph::forgetPersistent(rhi::BufferHandle buffer) { m_persistentBuffers.erase(buffer.value); }
+
 BufferRef FrameGraph::importBuffer(std::string name, rhi::BufferHandle buffer, rhi::Access currentState) {
     return importBuffer(std::move(name), buffer, currentState, currentState);
 }
@@ -640,9 +655,12 @@ bool FrameGraph::compile() {
     if (!allocate()) return false;
     placeBarriers();
     if (m_failed) return false;
-    for (const ResourceNode& r : m_resources)
+    for (const ResourceNode& r : m_resources) {
         if (r.imported && r.type == ResourceType::Texture && m_persistent.count(r.importedTexture.value))
             m_persistent[r.importedTexture.value] = r.endState;
+        if (r.imported && r.type == ResourceType::Buffer && m_persistentBuffers.count(r.importedBuffer.value))
+            m_persistentBuffers[r.importedBuffer.value] = r.endState;
+    }
     return true;
 }
 

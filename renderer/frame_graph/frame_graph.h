@@ -318,10 +318,14 @@ public:
     // remembers the state every compiled frame leaves them in, so their owner never tracks it.
     // importPersistent() imports with the remembered state (Access::None the first time) and
     // leaves the texture in `finalState`; persistentState() is where the last compiled frame left
-    // it (e.g. for a readback); forgetPersistent() drops a destroyed texture.
+    // it (e.g. for a readback); forgetPersistent() drops a destroyed texture. Persistent buffers
+    // (e.g. the SDF object array updated from deltas) work the same way.
     TextureRef importPersistent(std::string name, rhi::TextureHandle texture, rhi::Access finalState);
     rhi::Access persistentState(rhi::TextureHandle texture) const;
     void forgetPersistent(rhi::TextureHandle texture);
+    BufferRef importPersistent(std::string name, rhi::BufferHandle buffer, rhi::Access finalState);
+    rhi::Access persistentState(rhi::BufferHandle buffer) const;
+    void forgetPersistent(rhi::BufferHandle buffer);
 
     // Marks a result that must survive the frame: its producers are kept and (for transients) the
     // physical resource is not aliased after it. With finalState != None the resource is
@@ -525,7 +529,8 @@ private:
     std::optional<FrameTimings> readTimings(TimingFrame& t, bool blocking);
     TimingFrame& currentTimingFrame() { return m_timingRing[m_frame % kTimingFramesInFlight]; }
 
-    std::unordered_map<uint32_t, rhi::Access> m_persistent;  // texture handle -> state
+    std::unordered_map<uint32_t, rhi::Access> m_persistent;        // texture handle -> state
+    std::unordered_map<uint32_t, rhi::Access> m_persistentBuffers;  // buffer handle -> state
 
     TimingFrame m_timingRing[kTimingFramesInFlight];
     std::vector<FrameTimings> m_timingsReady;  // read early (pool reuse), returned by the next poll

@@ -625,6 +625,59 @@ TEST_F(FrameGraphTest, OverlappingTransientsDoNotAlias) {
     run();
 }
 
+// A persistent buffer (the SDF object array kept across frames) enters each frame in the state
+// the previous compiled frame left it in, without its owner tracking it.
+TEST_F(FrameGraphTest, PersistentBufferKeepsItsStateAcrossFrames) {
+    rhi::BufferHandle handle = makeBuffer("objects");
+    rhi::TextureHandle tex = makeTexture("tex");
+    EXPECT_EQ(graph().persistentState(handle), Access::None);  // never imported
+    for (int frame = 0; frame < 3; ++frame) {
+        graph().reset();
+        BufferRef buf = graph().importPersistent("objects", handle, Access::ShaderRead);
+        ASSERT_TRUE(buf.isValid());
+        graph().importPersistent("tex", tex, Access::ShaderSampled);  // same handle value space apart
+        if (frame != 1)                                               // frame 1 only reads: nothing to upload
+            graph().addPass<BufData>(
+                "upload", PassKind::Transfer,
+                [&](PassBuilder& b, BufData& d) { d.buf = b.write(buf, Access::CopyDst); },
+                [](const BufData&, PassContext&) {});
+        graph().addPass<BufData>(
+            "consume", PassKind::Compute,
+            [&](PassBuilder& b, BufData& d) {
+                d.buf = b.read(buf, Access::ShaderRead);
+                b.sideEffect();
+            },
+            [](const BufData&, PassContext& ctx) { dispatch(ctx, 1); });
+        ASSERT_TRUE(graph().compile());
+        const auto& consume = graph().compiled().findPass("consume")->barriers;
+        if (frame == 0) {
+            // First import: from None; the upload's CopyDst then the read.
+            const auto& upload = graph().compiled().findPass("upload")->barriers;
+            ASSERT_EQ(upload.size(), 1u);
+            EXPECT_TRUE(sameBarrier(upload[0], rhi::Barrier::buf(handle, Access::None, Access::CopyDst)));
+        } else if (frame == 1) {
+            EXPECT_TRUE(consume.empty()) << "frame 1 enters in ShaderRead: no barrier";
+        } else {
+            const auto& upload = graph().compiled().findPass("upload")->barriers;
+            ASSERT_EQ(upload.size(), 1u);
+            EXPECT_TRUE(
+                sameBarrier(upload[0], rhi::Barrier::buf(handle, Access::ShaderRead, Access::CopyDst)));
+        }
+        if (frame != 1) {
+            ASSERT_EQ(consume.size(), 1u);
+            EXPECT_TRUE(
+                sameBarrier(consume[0], rhi::Barrier::buf(handle, Access::CopyDst, Access::ShaderRead)));
+        }
+        run();
+        EXPECT_EQ(graph().persistentState(handle), Access::ShaderRead) << "frame " << frame;
+    }
+    graph().forgetPersistent(handle);
+    EXPECT_EQ(graph().persistentState(handle), Access::None);
+    EXPECT_EQ(graph().persistentState(tex), Access::ShaderSampled);  // textures tracked apart
+    dev().destroy(handle);
+    dev().destroy(tex);
+}
+
 TEST_F(FrameGraphTest, TransientsAreReusedAcrossFrames) {
     rhi::TextureHandle targetTex = makeTexture("target", Access::ColorTarget);
     std::vector<rhi::TextureHandle> handles;

@@ -95,6 +95,11 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                      {"slots", stats.atlas.slots},
                      {"size", {stats.atlas.width, stats.atlas.height, stats.atlas.depth}},
                      {"format", stats.atlas.format}};
+    j["sdfUpload"] = {{"objectsUploaded", stats.sdfUpload.objectsUploaded},
+                      {"fullUpload", stats.sdfUpload.fullUpload},
+                      {"deltaBytes", stats.sdfUpload.deltaBytes},
+                      {"uploadBytes", stats.sdfUpload.uploadBytes},
+                      {"objectBufferBytes", stats.sdfUpload.objectBufferBytes}};
     j["effects"] = {{"shadowLayers", stats.effects.shadowLayers}, {"ao", stats.effects.ao},
                     {"thickness", stats.effects.thickness},       {"reflection", stats.effects.reflection},
                     {"targetBytes", stats.effects.targetBytes},   {"lowResBytes", stats.effects.lowResBytes}};
