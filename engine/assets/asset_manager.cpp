@@ -747,6 +747,18 @@ const sdf::PsdfAsset* AssetManager::sdfField(AssetId id) const {
                : nullptr;
 }
 
+AssetId AssetManager::copySdfField(AssetId fieldId, std::string_view tag, std::string& error) {
+    const Entry* entry = find(fieldId);
+    if (!entry || entry->info.kind != AssetKind::SdfField) {
+        error = fmt::format("copySdfField: asset {:016x} is not a field", fieldId);
+        return 0;
+    }
+    const std::string key = fmt::format("copy:{}:{}", tag, entry->info.key);
+    const AssetId id = insert(AssetKind::SdfField, key, entry->info.sourcePath, entry->data, 0);
+    if (id == 0) error = fmt::format("copySdfField: the key '{}' collides with another asset", key);
+    return id;
+}
+
 AssetId AssetManager::addShapeProgram(std::string_view key, sdf::ShapeProgram program, std::string& error) {
     const AssetId id = stableId(AssetKind::ShapeProgram, key);
     if (const Entry* existing = find(id);

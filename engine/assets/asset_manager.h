@@ -107,6 +107,12 @@ public:
     // or more are logged (info). 0 and `error` when `mesh` is not a mesh asset or the bake fails
     // (e.g. "mesh has no non-degenerate triangles").
     AssetId bakeSdf(AssetId mesh, const sdf::BakeSettings& settings, std::string& error);
+    // A second SdfField asset with the same field as `field` under the key
+    // "copy:<tag>:<field's key>" (one more reference when that copy exists): a distinct id, so the
+    // renderer gives it its own atlas slot (a non-instanced object: scene sdf "shared": false),
+    // while the CPU grid is shared (the copy counts 0 bytes). 0 and `error` when `field` is not a
+    // field asset.
+    AssetId copySdfField(AssetId field, std::string_view tag, std::string& error);
 
     // ---- in-memory assets ------------------------------------------------------------------
     // Meshes are validated (indices in range, multiple of 3, finite positions, attribute counts);

@@ -425,6 +425,7 @@ private:
     bool parseShadows(const json& v, const std::string& ptr, ShadowSettings& out);
     bool parseAo(const json& v, const std::string& ptr, AoSettings& out);
     bool parseReflections(const json& v, const std::string& ptr, ReflectionSettings& out);
+    bool parseAcceleration(const json& v, const std::string& ptr, AccelerationSettings& out);
     bool parseTraceOverrides(const json& v, const std::string& ptr, TraceOverrides& out);
     bool parseMaterials(const json& v, const std::string& ptr);
     bool parseMaterial(const json& v, const std::string& ptr, ecs::Material& out);
@@ -538,7 +539,8 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
     if (!object(v, ptr) || !checkKeys(v, ptr,
                                       {"width", "height", "shading", "toneMapper", "exposure", "ambient",
                                        "ambientSky", "background", "camera", "fixedDt", "quality", "trace",
-                                       "debugView", "slice", "shadows", "ao", "reflections", "meshSdf"},
+                                       "debugView", "slice", "shadows", "ao", "reflections", "meshSdf",
+                                       "acceleration"},
                                       "render settings")) {
         return false;
     }
@@ -606,6 +608,8 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!parseAo(value, p, s.ao)) return false;
         } else if (key == "reflections") {
             if (!parseReflections(value, p, s.reflections)) return false;
+        } else if (key == "acceleration") {
+            if (!parseAcceleration(value, p, s.acceleration)) return false;
         } else if (key == "meshSdf") {
             std::string name;
             if (!string(value, p, name)) return false;
@@ -697,6 +701,41 @@ bool SceneParser::parseReflections(const json& v, const std::string& ptr, Reflec
                 !inRange(p, out.roughnessCutoff, 0.0f, 1.0f, false, false))
                 return false;
         } else if (!count(item.value(), p, 1, kMaxSdfSteps, out.maxSteps)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The render block's "acceleration" object (docs/FORMATS.md): the issue-13 toggles and the world
+// cache's clipmap shape; each key is optional and replaces the default of AccelerationSettings.
+bool SceneParser::parseAcceleration(const json& v, const std::string& ptr, AccelerationSettings& out) {
+    if (!object(v, ptr) || !checkKeys(v, ptr,
+                                      {"culling", "worldCache", "idField", "prepass", "cacheLevels",
+                                       "cacheResolution", "cacheVoxel", "cacheBudgetVoxels"},
+                                      "acceleration settings"))
+        return false;
+    for (const auto& item : v.items()) {
+        const std::string& key = item.key();
+        const std::string p = child(ptr, key);
+        const json& value = item.value();
+        if (key == "culling" || key == "worldCache" || key == "idField" || key == "prepass") {
+            bool& flag = key == "culling"      ? out.culling
+                         : key == "worldCache" ? out.worldCache
+                         : key == "idField"    ? out.idField
+                                               : out.prepass;
+            if (!boolean(value, p, flag)) return false;
+        } else if (key == "cacheLevels") {
+            if (!count(value, p, 1, 8, out.cacheLevels)) return false;
+        } else if (key == "cacheResolution") {
+            // Multiples of 8: the cache's compute passes work on 8^3 bricks.
+            if (!count(value, p, 16, 256, out.cacheResolution)) return false;
+            if (out.cacheResolution % 8 != 0)
+                return fail(p, fmt::format("{} is not a multiple of 8", out.cacheResolution));
+        } else if (key == "cacheVoxel") {
+            if (!number(value, p, out.cacheVoxel) || !nonNegative(p, out.cacheVoxel, "cacheVoxel"))
+                return false;
+        } else if (!count(value, p, 512, UINT32_MAX, out.cacheBudgetVoxels)) {
             return false;
         }
     }
@@ -1018,7 +1057,7 @@ bool SceneParser::parseMaterialRef(const json& v, const std::string& p, assets::
 bool SceneParser::parseSdf(const json& v, const std::string& ptr, ecs::SdfRenderer& out) {
     if (!object(v, ptr) || !checkKeys(v, ptr,
                                       {"shape", "csg", "psdf", "mesh", "resolution", "material",
-                                       "castShadows", "visible", "maxSteps"},
+                                       "castShadows", "visible", "maxSteps", "shared"},
                                       "an sdf component")) {
         return false;
     }
@@ -1080,6 +1119,21 @@ bool SceneParser::parseSdf(const json& v, const std::string& ptr, ecs::SdfRender
         m_assets.release(mesh);
         if (out.sdf == 0) return fail(p, err);
         hold(out.sdf);
+    }
+    // "shared": false gives this entity its own copy of the field (its own atlas slot: the
+    // non-instanced objects of penumbra bench objects); by default one field per source is shared.
+    // The scene keeps its reference to the shared field too, so the next copy reuses it.
+    if (auto it = v.find("shared"); it != v.end()) {
+        bool shared = true;
+        if (!boolean(*it, child(ptr, "shared"), shared)) return false;
+        if (!shared) {
+            if (out.source == ecs::SdfSource::Shapes)
+                return fail(child(ptr, "shared"), "\"shared\" applies to \"mesh\" and \"psdf\" fields only");
+            std::string err;
+            out.sdf = m_assets.copySdfField(out.sdf, m_name + ptr, err);
+            if (out.sdf == 0) return fail(child(ptr, "shared"), err);
+            hold(out.sdf);
+        }
     }
     if (auto it = v.find("material"); it != v.end()) {
         if (!parseMaterialRef(*it, child(ptr, "material"), out.material)) return false;

@@ -227,4 +227,43 @@ std::string utcNow() {
     return date;
 }
 
+CLI::Option* addAccelOption(CLI::App* cmd, std::string& value) {
+    return cmd->add_option(
+        "--accel", value,
+        "Acceleration toggles (replace the scene's render.acceleration ones): all | none | a "
+        "comma-separated list of culling, cache, id, prepass (exactly those on; all = the four; "
+        "docs/FORMATS.md)");
+}
+
+bool applyAccelOption(const std::string& value, scene::AccelerationSettings& accel, std::string& error) {
+    if (value.empty()) return true;
+    scene::AccelerationSettings out = accel;
+    const bool all = value == "all";
+    out.culling = out.worldCache = out.idField = out.prepass = all;
+    if (all || value == "none") {
+        accel = out;
+        return true;
+    }
+    size_t start = 0;
+    while (start <= value.size()) {
+        const size_t comma = std::min(value.find(',', start), value.size());
+        const std::string word = value.substr(start, comma - start);
+        bool* flag = word == "culling" ? &out.culling
+                     : word == "cache" ? &out.worldCache
+                     : word == "id"    ? &out.idField
+                     : word == "prepass" ? &out.prepass
+                                         : nullptr;
+        if (!flag) {
+            error = fmt::format("--accel '{}': unknown toggle '{}' (expected all, none or a comma-separated "
+                                "list of culling, cache, id, prepass)",
+                                value, word);
+            return false;
+        }
+        *flag = true;
+        start = comma + 1;
+    }
+    accel = out;
+    return true;
+}
+
 }  // namespace penumbra::cli

@@ -14,6 +14,7 @@
 
 #include "engine/core/output_file.h"
 #include "engine/image/image.h"
+#include "engine/scene/scene.h"
 #include "rhi/device.h"
 
 namespace penumbra::cli {
@@ -55,6 +56,13 @@ bool prepareOutputs(OutputFiles& outputs, const std::vector<std::string>& paths,
 CLI::Option* addBenchBackendOption(CLI::App* cmd, std::string& value);
 // The backends that value names, in run order (both: Vulkan, then OpenGL); false when it names none.
 bool benchBackends(const std::string& value, std::vector<rhi::Backend>& out);
+
+// `--accel all|none|LIST` (render, bench trace): LIST is a comma-separated subset of culling, cache,
+// id, prepass and turns exactly those on; all = the four; none = the unaccelerated baseline.
+CLI::Option* addAccelOption(CLI::App* cmd, std::string& value);
+// Applies an --accel value to the toggles of `accel` (cache sizes unchanged); false with `error`
+// naming the unknown word. An empty value changes nothing (the scene's render.acceleration).
+bool applyAccelOption(const std::string& value, scene::AccelerationSettings& accel, std::string& error);
 
 // The processed-asset cache folder: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra, else
 // ~/.cache/penumbra (empty when none of them is set).

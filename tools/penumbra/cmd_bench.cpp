@@ -173,6 +173,7 @@ int runBackend(const BenchTraceOptions& opt, rhi::Backend backend, const std::st
     }
     scene::RenderSettings& settings = engine->settings();
     if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
+    applyAccelOption(opt.accel, settings.acceleration, error);  // checked in runBenchTrace
     run.quality = scene::toString(settings.quality);
     if (engine->world().count<ecs::SdfRenderer>() == 0) {
         log::error("bench trace: {}: the scene has no SDF objects (sdf components): nothing to trace",
@@ -331,6 +332,7 @@ std::string commandLine(const BenchTraceOptions& opt) {
         fmt::format("penumbra bench trace {} --backend {} --width {} --height {} --frames {} --warmup {}",
                     opt.scene, opt.backend, opt.width, opt.height, opt.frames, opt.warmup);
     if (!opt.quality.empty()) c += " --quality " + opt.quality;
+    if (!opt.accel.empty()) c += " --accel " + opt.accel;
     return c;
 }
 
@@ -464,6 +466,7 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
                     "SDF trace quality preset: low | medium | high | reference (replaces the scene's "
                     "render.quality; the scene's render.trace overrides still apply)")
         ->check(CLI::IsMember({"low", "medium", "high", "reference"}));
+    addAccelOption(cmd, opt.accel);
     cmd->add_option("--csv", opt.csv, "Also write the results as CSV (one row per pass / step measure)");
     cmd->add_option("--markdown", opt.markdown,
                     "Also write the results as Markdown tables (docs/BENCHMARKS.md)");
@@ -473,6 +476,8 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
     cmd->add_flag("--no-cache", opt.noCache, "Do not read or write the processed-asset cache");
     out.accuracyOptions = std::make_shared<BenchAccuracyOptions>();
     out.accuracy = addBenchAccuracyCommand(*out.group, *out.accuracyOptions);
+    out.objectsOptions = std::make_shared<BenchObjectsOptions>();
+    out.objects = addBenchObjectsCommand(*out.group, *out.objectsOptions);
     return out;
 }
 
@@ -481,6 +486,10 @@ int runBenchTrace(const BenchTraceOptions& opt) {
     std::vector<rhi::Backend> backends;
     if (!benchBackends(opt.backend, backends)) {
         log::error("bench trace: --backend '{}': use vulkan, gl or both", opt.backend);
+        return 2;
+    }
+    if (scene::AccelerationSettings accel; !applyAccelOption(opt.accel, accel, error)) {
+        log::error("bench trace: {}", error);
         return 2;
     }
     if (!checkInputFile(opt.scene, "scene file (.json, .gltf or .glb)", error)) {

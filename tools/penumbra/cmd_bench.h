@@ -11,6 +11,8 @@
 //     frame each: over the pixels where an SDF was hit, and over all pixels) with their ratio.
 //     Progress goes to stderr; --csv / --markdown are written all or nothing.
 //   bench accuracy [--scenes a.json,...] [...] -o DIR   speed against error (cmd_bench_accuracy.h)
+//   bench objects [--counts 20,40,60,80] [...]          mTec Table 2: cost against object count and
+//                                                       acceleration toggles (bench_objects.h)
 // Exit codes: 0 ok, 1 runtime error (bad scene, device failure, unwritable output), 2 usage.
 #pragma once
 
@@ -20,6 +22,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "bench_objects.h"
 #include "cmd_bench_accuracy.h"
 
 namespace penumbra::cli {
@@ -32,6 +35,7 @@ struct BenchTraceOptions {
     uint32_t frames = 7;  // timed frames per setting
     uint32_t warmup = 2;  // untimed frames before them
     std::string quality;  // empty: the scene's render.quality
+    std::string accel;    // --accel (cli_common.h); empty: the scene's render.acceleration
     std::string csv;
     std::string markdown;
     std::string cacheDir;  // empty: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra or ~/.cache/penumbra
@@ -42,7 +46,9 @@ struct BenchCommands {
     CLI::App* group = nullptr;     // `bench`
     CLI::App* trace = nullptr;     // `bench trace`
     CLI::App* accuracy = nullptr;  // `bench accuracy` (cmd_bench_accuracy.h)
+    CLI::App* objects = nullptr;   // `bench objects` (bench_objects.h)
     std::shared_ptr<BenchAccuracyOptions> accuracyOptions;
+    std::shared_ptr<BenchObjectsOptions> objectsOptions;
 };
 
 BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& traceOpt);

@@ -201,6 +201,7 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "Ambient occlusion variant: off | five-tap | multi-ray | cones (bent normal) (replaces "
                     "the scene's render.ao.variant; docs/FORMATS.md)")
         ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
+    addAccelOption(cmd, opt.accel);
     return cmd;
 }
 
@@ -220,6 +221,7 @@ bool applySceneOverrides(const RenderOptions& opt, const glm::vec4& slice, Engin
         settings.shadows.hard = opt.shadows == "hard";
     }
     if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
+    applyAccelOption(opt.accel, settings.acceleration, error);  // checked in runRender
     // After the effect overrides: auto looks at them.
     if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
     if (!scene::applyMeshSdf(engine.scene(), engine.assets(), settings.meshSdf, error)) return false;
@@ -255,6 +257,10 @@ int runRender(const RenderOptions& opt) {
         return 2;
     }
     std::vector<AovOutput> aovs;
+    if (scene::AccelerationSettings accel; !applyAccelOption(opt.accel, accel, error)) {
+        log::error("render: {}", error);
+        return 2;
+    }
     if (!parseAovOutputs(opt.aov, aovs, error) || !requestAuxTarget(rendererDesc, aovs, error)) {
         log::error("render: {}", error);
         return 2;
