@@ -43,6 +43,7 @@
 #include "renderer/features/mesh_gbuffer.h"
 #include "renderer/features/scene_upload.h"
 #include "renderer/features/sdf_atlas.h"
+#include "renderer/features/sdf_cull.h"
 #include "renderer/features/sdf_scene.h"
 #include "renderer/features/sdf_surface.h"
 #include "renderer/features/sdf_trace.h"
@@ -187,6 +188,8 @@ struct SceneRenderer::Impl {
     bool lastAlbedo = false;
     bool lastAux = false;
     bool lastEffect[kTargetCount] = {};  // effect targets written by the last frame
+    // Buffers the last frame kept for readBuffer (tests): name -> handle, bytes.
+    std::unordered_map<std::string, std::pair<rhi::BufferHandle, uint64_t>> keptBuffers;
 
     explicit Impl(rhi::Device& d)
         : device(d),
@@ -885,6 +888,10 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.nearPlane = cam.nearPlane;
         trace.farPlane = cam.farPlane;
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
+        // Per-tile lists of the traced objects (the tiles debug view shows them whatever the toggle).
+        if (g.tracedSdfs > 0 && (desc.settings.acceleration.culling || view == DebugView::Tiles))
+            addSdfTileCull(fc, {std::span(sdfData.objects).first(sdfData.tracedCount), cam.view, cam.proj,
+                                cam.nearPlane, cam.farPlane});
         if (g.tracedSdfs > 0) addSdfTrace(fc, trace);  // occluders only: the effects still see them
         // Textured SDF materials: triplanar base colour and normal maps in object space.
         if (g.tracedSdfs > 0) addSdfSurface(fc, sdfSurfaceMaterials(g));
@@ -982,6 +989,16 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
                 atlas.size().z,
                 atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
     if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
+    keptBuffers.clear();
+    if (const SdfCullLists* lists = board.find<SdfCullLists>()) {
+        for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao}) st.tileListBytes += l->bytes;
+        if (lists->primary.valid()) {
+            const uint64_t rangeBytes = uint64_t(lists->primary.tilesX) * lists->primary.tilesY * 8;
+            keptBuffers["sdf.tile_ranges"] = {graph.physicalBuffer(lists->primary.ranges), rangeBytes};
+            keptBuffers["sdf.tile_indices"] = {graph.physicalBuffer(lists->primary.indices),
+                                               lists->primary.bytes - rangeBytes};
+        }
+    }
     if (!g.sdfs.empty()) {
         const SdfSceneStore::Stats& up = sdfStore.stats();
         st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
@@ -1051,6 +1068,21 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
         "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo, gbuffer.aux, "
         "effects.shadow, effects.ao, effects.thickness, effects.reflection)";
     return false;
+}
+
+bool SceneRenderer::readBuffer(const std::string& name, std::vector<uint8_t>& bytes, std::string& error) {
+    Impl& s = *m_impl;
+    const auto it = s.keptBuffers.find(name);
+    if (it == s.keptBuffers.end() || !it->second.first) {
+        error = "scene renderer: readBuffer: '" + name + "' was not kept by the last frame";
+        return false;
+    }
+    bytes.resize(it->second.second);
+    if (!s.device.readBuffer(it->second.first, 0, bytes.size(), bytes.data())) {
+        error = "scene renderer: readBuffer: reading back '" + name + "' failed";
+        return false;
+    }
+    return true;
 }
 
 const FrameStats& SceneRenderer::lastFrameStats() const {

@@ -109,6 +109,7 @@ struct FrameStats {
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;
+    uint64_t tileListBytes = 0;  // per-tile object lists (renderer/features/sdf_cull.h), all kinds
 };
 
 struct FrameDesc {
@@ -148,6 +149,10 @@ public:
     // (tests); false when the target was not part of the frame.
     bool readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
                     std::string& error);
+
+    // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices" (the
+    // primary tile lists, renderer/features/sdf_cull.h, when the frame built them); false otherwise.
+    bool readBuffer(const std::string& name, std::vector<uint8_t>& bytes, std::string& error);
 
     // The last frame's statistics; its pass timings are waited for if they have not arrived yet
     // (so frame loops that must not block use takeTimings(false) instead).

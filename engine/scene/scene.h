@@ -50,11 +50,12 @@ enum class DebugView : uint32_t {
     Ao,
     Shadow,
     BentNormal,
-    Thickness
+    Thickness,
+    Tiles  // the primary tile lists' lengths (renderer/features/sdf_cull.h)
 };
 inline constexpr const char* kDebugViewNames[] = {"none",   "normals",    "depth",       "albedo",
                                                   "steps",  "ids",        "field-slice", "ao",
-                                                  "shadow", "bentnormal", "thickness"};
+                                                  "shadow", "bentnormal", "thickness",   "tiles"};
 inline const char* toString(DebugView view) {
     return kDebugViewNames[uint32_t(view) < std::size(kDebugViewNames) ? uint32_t(view) : 0];
 }

@@ -11,6 +11,7 @@
 #include "renderer/features/debug_field_slice.h"
 #include "renderer/features/effects.h"
 #include "renderer/features/fullscreen.h"
+#include "renderer/features/sdf_cull.h"
 
 namespace penumbra::render {
 
@@ -80,8 +81,15 @@ fg::TextureRef effectTarget(const FrameContext& fc, DebugView view) {
     }
 }
 
+// The primary tile lists the tiles view shows (null: not built this frame).
+const SdfTileLists* tileLists(const FrameContext& fc, DebugView view) {
+    const SdfCullLists* lists = view == DebugView::Tiles ? fc.board.find<SdfCullLists>() : nullptr;
+    return lists && lists->primary.valid() ? &lists->primary : nullptr;
+}
+
 // Steps and ids (modes 3, 4) read gbuffer.aux: variant AUX; albedo (mode 2) the albedo target; the
-// effect views (modes 6..9) their effect's target: variant EFFECTS.
+// effect views (modes 6..9) their effect's target: variant EFFECTS; tiles (mode 10) the primary
+// tile lists: variant TILES.
 void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
     if (desc.view == DebugView::FieldSlice) {
         addDebugFieldSlice(fc, {desc.slice, desc.fieldSafety, desc.nearPlane, desc.farPlane});
@@ -92,20 +100,25 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
         SceneBuffers scene;
         GBuffer gb;
         fg::TextureRef effect;
+        SdfTileLists tiles;
         fg::TextureRef output;
     };
     // 1. Choose the shader variant; the program's pipeline and sampler come from the cache.
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const bool aux = (desc.view == DebugView::Steps || desc.view == DebugView::Ids) && gbuffer.aux.isValid();
     const fg::TextureRef effect = effectTarget(fc, desc.view);
+    const SdfTileLists* tiles = tileLists(fc, desc.view);
+    const SdfSceneBuffers* sdf = fc.board.find<SdfSceneBuffers>();
     using V = program::Variant;
-    const V variant = effect.isValid()       ? V::Effects
+    const V variant = tiles                  ? V::Tiles
+                      : effect.isValid()       ? V::Effects
                       : gbuffer.albedo.isValid() ? (aux ? V::AlbedoAux : V::Albedo)
                                                  : (aux ? V::Aux : V::Default);
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     // 2. The push-constant block, through the struct shaderc generated from the shader.
-    const program::PushConstants push{glm::uvec4(uint32_t(desc.view) - 1, 0, 0, 0),
+    const program::PushConstants push{glm::uvec4(uint32_t(desc.view) - 1, tiles ? tiles->tilesX : 0,
+                                                 sdf ? sdf->tracedCount : 0, 0),
                                       glm::vec4(desc.depthRange, float(std::max(desc.stepLimit, 1u)), 0, 0)};
     fc.graph.addPass<Data>(
         "debug_view", fg::PassKind::Raster,
@@ -113,8 +126,12 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
         [&](fg::PassBuilder& b, Data& d) {
             d.scene = *fc.board.find<SceneBuffers>();
             d.gb = gbuffer;
-            if (effect.isValid()) d.gb.albedo = {};  // the EFFECTS variant does not read albedo
+            if (effect.isValid() || tiles) d.gb.albedo = {};  // EFFECTS and TILES do not read albedo
             d.effect = effect;
+            if (tiles) {
+                d.tiles = *tiles;
+                readSdfTileLists(b, d.tiles);
+            }
             d.output = b.write(fc.board.find<Output>()->color, rhi::Access::ColorTarget);
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
@@ -133,6 +150,7 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
             setGBuffer(params, ctx, d.gb, prog.nearest);
             if (aux) params.set("gbufferAux", ctx.texture(d.gb.aux), prog.nearest);
             if (d.effect.isValid()) params.set("effectTexture", ctx.texture(d.effect), prog.nearest);
+            if (d.tiles.valid()) setSdfTileLists(params, ctx, d.tiles);
             ctx.cmd.pushConstants(&push, sizeof(push));
             drawFullscreen(ctx, params, cache, prog.pipeline);
         });

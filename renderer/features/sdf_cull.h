@@ -9,12 +9,19 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
+
+#include <glm/mat4x4.hpp>
 
 #include "renderer/features/frame_context.h"
+#include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
 
 inline constexpr uint32_t kSdfTileSize = 8;  // pixels per tile side
+// A range's count meaning "every object of the consumer's range": written only when a tile's
+// reservation would pass the indices' capacity, which sdfTileListCapacity makes unreachable.
+inline constexpr uint32_t kSdfTileAllObjects = 0xffffffffu;
 
 // One set of tile lists. ranges: uvec2 per tile and layer (x first index into `indices`, y count);
 // tile index = (y / 8) * tilesX + x / 8; layer L (one per shadowed light for shadows) starts at
@@ -35,5 +42,34 @@ struct SdfCullLists {
     SdfTileLists shadow;   // casting objects per shadowed light (layers = shadow layers)
     SdfTileLists ao;       // casting objects within the AO distance
 };
+
+// ---- the primary lists (pass "sdf_tile_cull") ----------------------------------------------------
+
+struct SdfTileCullDesc {
+    std::span<const GpuSdfObject> objects;  // objects [0, tracedCount) of the frame (CPU copy)
+    glm::mat4 viewMatrix{1.0f};             // world -> view, as the View block's
+    glm::mat4 projMatrix{1.0f};             // view -> clip without jitter (Vulkan y-down clip space)
+    float nearPlane = 0.1f;                 // linear depths of the traced rays' ends
+    float farPlane = 1000.0f;
+};
+
+// Upper bound of the total list length over all tiles for `desc` on a width x height frame: per
+// object the tiles of the conservative screen rectangle of its bounding sphere (grown by a tile),
+// every tile for unbounded objects and spheres that reach behind the camera. The pass's indices
+// buffer holds this many entries (at least one).
+uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height);
+
+// Adds "sdf_tile_cull_clear" (transfer: zeroes the slot counter) and "sdf_tile_cull" (compute:
+// one 64-invocation group per tile) and publishes SdfCullLists::primary (other members kept). Reads
+// SceneBuffers::view and SdfSceneBuffers::objects; desc.objects must describe the uploaded objects.
+// The lists are marked as frame outputs (kept to the end of the frame, never aliased after their
+// last use) so that SceneRenderer::readBuffer can read them back and the pass runs even while no
+// consumer reads them.
+const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc);
+
+// What a consumer pass declares and binds (buffers "SdfTileRanges", "SdfTileIndices" of
+// sdf_tiles.glsl) for one set of lists.
+void readSdfTileLists(fg::PassBuilder& b, const SdfTileLists& lists);
+void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists);
 
 }  // namespace penumbra::render

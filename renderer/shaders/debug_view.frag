@@ -11,11 +11,14 @@
 //   mode 8 bentnormal  bent normal * 0.5 + 0.5 (effects.ao gba)
 //   mode 9 thickness   t / (t + r), t the thickness (effects.thickness, scene units), r the material's
 //                      subsurfaceRadius: 0 black (none), t = r mid grey, thick white
+//   mode 10 tiles      the primary tile list length n of the pixel's 8x8 tile (variant TILES:
+//                      sdf_tiles.glsl) through the steps ramp at log2(1 + n) / log2(1 + N), N the
+//                      traced objects (mode.z); 0 black, the "all objects" fallback magenta
 // The effect views bind the effect's target as effectTexture (variant EFFECTS); without it (the
 // effect did not run) they show what lighting uses then: AO and shadow 1, the shading normal,
-// thickness 0.
+// thickness 0. Tiles without lists (no traced SDF object) are black.
 #version 450
-#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX EFFECTS
+#pragma penumbra_variants ALBEDO AUX ALBEDO+AUX EFFECTS TILES
 #include "scene.glsl"
 #include "gbuffer.glsl"
 #include "brdf.glsl"
@@ -35,9 +38,15 @@ layout(set = 2, binding = 4) uniform sampler2D gbufferAux;
 #ifdef EFFECTS
 layout(set = 2, binding = 5) uniform sampler2D effectTexture;
 #endif
+#ifdef TILES
+#define SDF_TILES_SET 2
+#define SDF_TILE_RANGES_BINDING 6
+#define SDF_TILE_INDICES_BINDING 7
+#include "sdf_tiles.glsl"
+#endif
 
 layout(push_constant) uniform DebugView {
-    uvec4 mode;        // x mode (see above)
+    uvec4 mode;        // x mode (see above), y tiles per row, z traced objects (tiles)
     vec4 depthRange;   // x linear depth shown as black, y step limit (the heat map's top)
 } debugView;
 
@@ -85,7 +94,16 @@ void main() {
     float depth = texelFetch(gbufferDepth, pixel, 0).r;
     uint mode = debugView.mode.x;
     vec3 value = vec3(0.0);
-    if (mode >= 6u) {
+    if (mode == 10u) {
+#ifdef TILES
+        uint n = sdfTileRanges[sdfTileIndex(pixel, debugView.mode.y)].y;
+        if (n == 0xffffffffu) {
+            value = vec3(1.0, 0.0, 1.0);
+        } else if (n > 0u) {
+            value = heat(log2(1.0 + float(n)) / log2(1.0 + float(max(debugView.mode.z, 1u))));
+        }
+#endif
+    } else if (mode >= 6u) {
         if (depth > 0.0) value = effectView(mode, pixel);
     } else if (mode >= 3u) {
 #ifdef AUX

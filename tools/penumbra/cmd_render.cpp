@@ -103,6 +103,7 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
     j["effects"] = {{"shadowLayers", stats.effects.shadowLayers}, {"ao", stats.effects.ao},
                     {"thickness", stats.effects.thickness},       {"reflection", stats.effects.reflection},
                     {"targetBytes", stats.effects.targetBytes},   {"lowResBytes", stats.effects.lowResBytes}};
+    j["tileListBytes"] = stats.tileListBytes;
     j["counts"] = {{"entities", world.aliveCount()},
                    {"meshRenderers", world.count<ecs::MeshRenderer>()},
                    {"cameras", world.count<ecs::Camera>()},
@@ -181,10 +182,10 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
     cmd->add_option("--debug-view", opt.debugView,
                     "Show a debug view instead of the lit image: normals | depth | albedo | steps | ids | "
-                    "field-slice | ao | shadow (first shadowed light) | bentnormal | thickness (none: lit; "
-                    "replaces the scene's render.debugView; docs/FORMATS.md)")
+                    "field-slice | ao | shadow (first shadowed light) | bentnormal | thickness | tiles (objects per "
+                    "8x8 tile after culling) (none: lit; replaces the scene's render.debugView; docs/FORMATS.md)")
         ->check(CLI::IsMember({"none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao",
-                               "shadow", "bentnormal", "thickness"}));
+                               "shadow", "bentnormal", "thickness", "tiles"}));
     cmd->add_option("--slice", opt.slice,
                     "The field-slice plane: AXIS=OFFSET (x, y or z; e.g. y=0.5) or NX,NY,NZ,OFFSET "
                     "(dot(N / |N|, p) = OFFSET); replaces the scene's render.slice (default y=0)");

@@ -1,0 +1,160 @@
+// Feature "sdf_cull" (renderer/features/sdf_cull.h): the primary tile lists - the CPU bound that
+// sizes them and the passes that build them (renderer/shaders/sdf_tile_cull.comp).
+#include "renderer/features/sdf_cull.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+
+#include <shaders/sdf_tile_cull.h>
+
+#include "renderer/core/shader_params.h"
+
+namespace penumbra::render {
+namespace {
+
+namespace program = shaders::sdf_tile_cull;
+static_assert(sizeof(GpuSdfObject) == sizeof(program::SdfObject));
+static_assert(offsetof(GpuSdfObject, model) == offsetof(program::SdfObject, model));
+static_assert(offsetof(GpuSdfObject, boundsMin) == offsetof(program::SdfObject, boundsMin));
+static_assert(offsetof(GpuSdfObject, boundsMax) == offsetof(program::SdfObject, boundsMax));
+
+bool unbounded(const GpuSdfObject& o) {
+    for (int a = 0; a < 3; ++a)
+        if (std::abs(o.boundsMin[a]) >= 0.5f * kSdfUnbounded || std::abs(o.boundsMax[a]) >= 0.5f * kSdfUnbounded)
+            return true;
+    return false;
+}
+
+// Tiles covered by one object's conservative screen rectangle (see sdfTileListCapacity).
+uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_t width, uint32_t height) {
+    const uint32_t tilesX = (width + kSdfTileSize - 1) / kSdfTileSize;
+    const uint32_t tilesY = (height + kSdfTileSize - 1) / kSdfTileSize;
+    const uint64_t all = uint64_t(tilesX) * tilesY;
+    if (unbounded(o)) return all;
+    // The bounding sphere of the box under `model` (its farthest corner, as the shader computes it),
+    // grown by 1 % against rounding.
+    const glm::dmat4 m(o.model);
+    const glm::dvec3 lo(o.boundsMin), hi(o.boundsMax), h = 0.5 * (hi - lo);
+    const glm::dvec3 a0 = glm::dvec3(m[0]) * h.x, a1 = glm::dvec3(m[1]) * h.y, a2 = glm::dvec3(m[2]) * h.z;
+    double radius = 0.0;
+    for (double s1 : {-1.0, 1.0})
+        for (double s2 : {-1.0, 1.0}) radius = std::max(radius, glm::length(a0 + s1 * a1 + s2 * a2));
+    radius = radius * 1.01 + 1e-6;
+    const glm::dvec3 centre = glm::dvec3(glm::dmat4(desc.viewMatrix) * m * glm::dvec4(0.5 * (lo + hi), 1.0));
+    const double depth = -centre.z;  // linear view depth
+    if (!std::isfinite(depth) || !std::isfinite(radius)) return all;
+    const double slack = 1e-3 * (radius + glm::length(centre));  // far beyond the shader's margin
+    if (depth + radius + slack < desc.nearPlane || depth - radius - slack > desc.farPlane) return 0;
+    // A sphere reaching the camera plane has no bounded projection: every tile.
+    if (!(depth - radius > 1e-4 * std::abs(depth) + 1e-6)) return all;
+    // In front of the camera the sphere's projection lies in the hull of its view-space cube's
+    // projected corners (perspective maps convex sets with depth > 0 to convex sets).
+    const glm::dmat4 proj(desc.projMatrix);
+    glm::dvec2 pmin(1e300), pmax(-1e300);
+    for (int c = 0; c < 8; ++c) {
+        const glm::dvec3 corner = centre + radius * glm::dvec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
+        const glm::dvec4 clip = proj * glm::dvec4(corner, 1.0);
+        const glm::dvec2 pixel = (glm::dvec2(clip) / clip.w * 0.5 + 0.5) * glm::dvec2(width, height);
+        pmin = glm::min(pmin, pixel);
+        pmax = glm::max(pmax, pixel);
+    }
+    // Tile range grown by one tile each way, clamped to the frame.
+    auto range = [](double a, double b, uint32_t tiles) -> uint64_t {
+        const double t0 = std::max(std::floor(a / kSdfTileSize) - 1.0, 0.0);
+        const double t1 = std::min(std::floor(b / kSdfTileSize) + 1.0, double(tiles) - 1.0);
+        return t1 >= t0 ? uint64_t(t1 - t0) + 1 : 0;
+    };
+    return range(pmin.x, pmax.x, tilesX) * range(pmin.y, pmax.y, tilesY);
+}
+
+}  // namespace
+
+uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height) {
+    uint64_t total = 0;
+    for (const GpuSdfObject& o : desc.objects) total += objectTiles(o, desc, width, height);
+    return std::max<uint64_t>(total, 1);
+}
+
+const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc) {
+    const SdfSceneBuffers& sdf = *fc.board.find<SdfSceneBuffers>();
+    const fg::BufferRef view = fc.board.find<SceneBuffers>()->view;
+    SdfTileLists lists;
+    lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
+    lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
+    const uint32_t count = std::min<uint32_t>(uint32_t(desc.objects.size()), sdf.tracedCount);
+    const uint64_t capacity = std::min<uint64_t>(sdfTileListCapacity(desc, fc.width, fc.height), 0xfffffff0u);
+    const uint64_t rangeBytes = uint64_t(lists.tilesX) * lists.tilesY * 8;
+    const uint64_t indexBytes = capacity * 4;
+    lists.bytes = rangeBytes + indexBytes;
+
+    auto buffer = [](fg::PassBuilder& b, const char* name, uint64_t size) {
+        rhi::BufferDesc d;
+        d.size = size;
+        d.debugName = name;
+        return b.createBuffer(name, d);
+    };
+    struct Clear {
+        fg::BufferRef counter;
+    };
+    const Clear& clear = fc.graph.addPass<Clear>(
+        "sdf_tile_cull_clear", fg::PassKind::Transfer,
+        [&](fg::PassBuilder& b, Clear& d) {
+            d.counter = b.write(buffer(b, "sdf.tile_counter", 16), rhi::Access::CopyDst);
+        },
+        [](const Clear& d, fg::PassContext& ctx) { ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, 16, 0u); });
+
+    struct Data {
+        fg::BufferRef view, objects, counter, ranges, indices;
+    };
+    const rhi::ShaderDesc& cs = program::compute();
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const program::PushConstants push{glm::uvec4(count, uint32_t(capacity), lists.tilesX, lists.tilesY),
+                                      glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f)};
+    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
+    const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
+    const Data& data = fc.graph.addPass<Data>(
+        "sdf_tile_cull", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.view = b.read(view, rhi::Access::UniformRead);
+            d.objects = b.read(sdf.objects, rhi::Access::ShaderRead);
+            d.counter = b.write(clear.counter, rw);
+            d.ranges = b.write(buffer(b, "sdf.tile_ranges", rangeBytes), rhi::Access::ShaderWrite);
+            d.indices = b.write(buffer(b, "sdf.tile_indices", indexBytes), rhi::Access::ShaderWrite);
+        },
+        [&cache = fc.cache, &cs, pipeline, push, groupsX, groupsY](const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.view))
+                .set("SdfObjects", ctx.buffer(d.objects))
+                .set("SdfTileCounter", ctx.buffer(d.counter))
+                .set("SdfTileRangesOut", ctx.buffer(d.ranges))
+                .set("SdfTileIndicesOut", ctx.buffer(d.indices));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            ctx.cmd.dispatch(groupsX, groupsY);
+        });
+    lists.ranges = data.ranges;
+    lists.indices = data.indices;
+    fc.graph.markOutput(lists.ranges);
+    fc.graph.markOutput(lists.indices);
+
+    const SdfCullLists* previous = fc.board.find<SdfCullLists>();
+    SdfCullLists all = previous ? *previous : SdfCullLists{};
+    all.primary = lists;
+    return fc.board.add<SdfCullLists>(all).primary;
+}
+
+void readSdfTileLists(fg::PassBuilder& b, const SdfTileLists& lists) {
+    b.read(lists.ranges, rhi::Access::ShaderRead);
+    b.read(lists.indices, rhi::Access::ShaderRead);
+}
+
+void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists) {
+    params.set("SdfTileRanges", ctx.buffer(lists.ranges)).set("SdfTileIndices", ctx.buffer(lists.indices));
+}
+
+}  // namespace penumbra::render

@@ -1,0 +1,149 @@
+// sdf_tile_cull: the primary tile lists (renderer/features/sdf_cull.h, read through sdf_tiles.glsl).
+// One workgroup of 64 invocations per 8x8 pixel tile of the full-resolution frame:
+//  1. the tile frustum: the camera position and the rays through the tile's outer pixel corners
+//     (the ray construction of sdf_trace.comp: forward + ndc.x rayRight + ndc.y rayUp), bounded by
+//     the near and far planes (linear depth). The corners enclose every pixel-centre ray of the tile
+//     with half a pixel to spare;
+//  2. per object in [0, count): unbounded objects (bounds +-1e30) are always listed; otherwise the
+//     world bounding sphere of its local box under `model`, then the box itself (an OBB: centre and
+//     three half axes) against the six planes with the projected-radius test. A box is dropped only
+//     when it lies wholly outside one plane (with a small relative margin): conservative, an object
+//     whose box any pixel ray of the tile crosses between near and far is never dropped;
+//  3. count + prefix sum, no fixed cap: the group counts its objects (shared atomic), one invocation
+//     reserves that many slots with an atomicAdd on the frame's counter (the prefix sum across
+//     tiles), then each chunk of 64 objects is written in ascending object order at the reserved
+//     base plus the chunk's running total and an exclusive prefix of the accepted flags (popcount
+//     of a shared 64-bit mask). The CPU sizes the indices from the scene (sdfTileListCapacity, an
+//     upper bound of this total); a reservation past that capacity - unreachable by that bound -
+//     writes (0, 0xffffffff), "all objects", and the consumer loops over every object.
+// Per-invocation loops run count / 64 iterations (software drivers dislike very long loops).
+#version 450
+layout(local_size_x = 64) in;
+
+#include "view.glsl"
+
+// The layout of SdfObject in sdf_scene.glsl (sdf_cull.cpp checks it against GpuSdfObject); this
+// pass reads only the matrices and the bounds, so it does not include the distance code.
+struct SdfObject {
+    mat4 worldToLocal;
+    mat4 model;
+    mat4 prevModel;
+    vec4 boundsMin;  // xyz local bounds (+-1e30 when unbounded), w sigma_min
+    vec4 boundsMax;
+    uvec4 info;
+    uvec4 params;
+};
+
+layout(set = 2, binding = 0, std430) readonly buffer SdfObjects { SdfObject sdfObjects[]; };
+layout(set = 2, binding = 1, std430) writeonly buffer SdfTileRangesOut { uvec2 rangesOut[]; };
+layout(set = 2, binding = 2, std430) writeonly buffer SdfTileIndicesOut { uint indicesOut[]; };
+layout(set = 2, binding = 3, std430) buffer SdfTileCounter { uint reserved; };
+
+layout(push_constant) uniform SdfTileCull {
+    uvec4 counts;  // x objects [0, x) are culled, y capacity of indicesOut, z tilesX, w tilesY
+    vec4 clip;     // x near, y far (linear depth)
+} cull;
+
+const uint kAllObjects = 0xffffffffu;
+
+// Relative to the camera position o (no cancellation far from the origin): xyz inward unit normal,
+// w offset; p is inside when dot(n, p - o) + w >= 0.
+vec4 g_planes[6];
+
+// A side plane through the camera containing the directions `along` and `corner`, facing `inward`.
+vec4 sidePlane(vec3 along, vec3 corner, vec3 inward) {
+    vec3 n = normalize(cross(along, corner));
+    return vec4(dot(n, inward) < 0.0 ? -n : n, 0.0);
+}
+
+void tilePlanes(uvec2 tile) {
+    vec2 lo = vec2(tile * 8u), hi = min(vec2((tile + 1u) * 8u), view.viewport.xy);
+    vec2 ndcLo = lo * view.viewport.zw * 2.0 - 1.0, ndcHi = hi * view.viewport.zw * 2.0 - 1.0;
+    vec3 f = view.forward.xyz, r = view.rayRight.xyz, u = view.rayUp.xyz;
+    g_planes[0] = sidePlane(u, f + ndcLo.x * r, r);
+    g_planes[1] = sidePlane(u, f + ndcHi.x * r, -r);
+    g_planes[2] = sidePlane(r, f + ndcLo.y * u, u);
+    g_planes[3] = sidePlane(r, f + ndcHi.y * u, -u);
+    vec3 fwd = normalize(f);
+    g_planes[4] = vec4(fwd, -cull.clip.x);  // linear depth >= near
+    g_planes[5] = vec4(-fwd, cull.clip.y);  // linear depth <= far
+}
+
+// Whether the object's box may meet the tile frustum.
+bool objectInTile(uint obj) {
+    vec3 bmin = sdfObjects[obj].boundsMin.xyz, bmax = sdfObjects[obj].boundsMax.xyz;
+    if (any(greaterThanEqual(abs(bmin), vec3(0.5e30))) || any(greaterThanEqual(abs(bmax), vec3(0.5e30))))
+        return true;  // unbounded (a plane): always listed
+    mat4 m = sdfObjects[obj].model;
+    vec3 h = 0.5 * (bmax - bmin);
+    vec3 c = (m * vec4(0.5 * (bmin + bmax), 1.0)).xyz - view.position.xyz;  // centre from the camera
+    vec3 a0 = m[0].xyz * h.x, a1 = m[1].xyz * h.y, a2 = m[2].xyz * h.z;
+    // The box's bounding sphere: its farthest corner from the centre.
+    float radius = sqrt(max(max(dot(a0 + a1 + a2, a0 + a1 + a2), dot(a0 + a1 - a2, a0 + a1 - a2)),
+                            max(dot(a0 - a1 + a2, a0 - a1 + a2), dot(a0 - a1 - a2, a0 - a1 - a2))));
+    // Margin for rounding: relative to the sizes that enter the plane distance.
+    float margin = 1e-4 * (radius + length(c)) + 1e-6 * length(view.position.xyz) + 1e-6;
+    for (int i = 0; i < 6; ++i)
+        if (dot(g_planes[i].xyz, c) + g_planes[i].w < -radius - margin) return false;
+    for (int i = 0; i < 6; ++i) {
+        vec3 n = g_planes[i].xyz;
+        float projected = abs(dot(n, a0)) + abs(dot(n, a1)) + abs(dot(n, a2));
+        if (dot(n, c) + g_planes[i].w < -projected - margin) return false;
+    }
+    return true;
+}
+
+shared uint s_count;
+shared uint s_base;
+shared bool s_overflow;
+shared uint s_mask[2];
+
+void main() {
+    uvec2 tile = gl_WorkGroupID.xy;
+    uint tileIndex = tile.y * cull.counts.z + tile.x;
+    uint lid = gl_LocalInvocationIndex;
+    uint count = cull.counts.x;
+    tilePlanes(tile);
+    if (lid == 0u) s_count = 0u;
+    barrier();
+
+    // 1. Count; the first 32 chunks' results stay in a register mask for step 3.
+    uint mine = 0u, bits = 0u;
+    for (uint chunk = 0u; chunk * 64u < count; ++chunk) {
+        uint obj = chunk * 64u + lid;
+        if (obj < count && objectInTile(obj)) {
+            ++mine;
+            if (chunk < 32u) bits |= 1u << chunk;
+        }
+    }
+    if (mine > 0u) atomicAdd(s_count, mine);
+    barrier();
+
+    // 2. Reserve the tile's slots (the prefix sum across tiles).
+    if (lid == 0u) {
+        uint n = s_count;
+        uint base = n > 0u ? atomicAdd(reserved, n) : 0u;
+        s_overflow = base > cull.counts.y || n > cull.counts.y - base;
+        s_base = base;
+        rangesOut[tileIndex] = s_overflow ? uvec2(0u, kAllObjects) : uvec2(base, n);
+    }
+    barrier();
+    if (s_overflow || s_count == 0u) return;  // uniform across the group
+
+    // 3. Write the indices in ascending order, chunk by chunk.
+    uint base = s_base, total = s_count, written = 0u;
+    for (uint chunk = 0u; chunk * 64u < count && written < total; ++chunk) {
+        uint obj = chunk * 64u + lid;
+        bool accept = obj < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj));
+        if (lid < 2u) s_mask[lid] = 0u;
+        barrier();
+        if (accept) atomicOr(s_mask[lid >> 5u], 1u << (lid & 31u));
+        barrier();
+        uint lower = lid < 32u ? bitCount(s_mask[0] & ((1u << lid) - 1u))
+                               : bitCount(s_mask[0]) + bitCount(s_mask[1] & ((1u << (lid - 32u)) - 1u));
+        uint slot = written + lower;
+        if (accept && slot < total) indicesOut[base + slot] = obj;
+        written += bitCount(s_mask[0]) + bitCount(s_mask[1]);
+        barrier();  // every invocation has read the mask before the next chunk clears it
+    }
+}
