@@ -139,9 +139,11 @@ bool SdfSceneStore::reserve(fg::FrameGraph& graph, Buffer& b, uint64_t bytes, co
     const bool fits = bytes <= b.capacity;
     const bool tooLarge = b.capacity > minimum && b.capacity > 4 * bytes;
     if (b.handle && fits && !tooLarge) return false;
-    // Grow at least geometrically; shrink to twice the need (hysteresis against a count that
+    // New: half again the need (objects spawned later fit without a rewrite). Growth: at least
+    // double, and half again the need. Shrink: twice the need (hysteresis against a count that
     // oscillates around a threshold).
-    uint64_t capacity = !b.handle ? bytes : !fits ? std::max(bytes, 2 * b.capacity) : 2 * bytes;
+    const uint64_t headroom = bytes + bytes / 2;
+    uint64_t capacity = !b.handle ? headroom : !fits ? std::max(headroom, 2 * b.capacity) : 2 * bytes;
     capacity = (std::max(capacity, minimum) + element - 1) / element * element;
     destroy(graph, b);
     rhi::BufferDesc desc;

@@ -80,8 +80,9 @@ struct SdfSceneBuffers {
 float smallestSingularValue(const glm::mat3& m);
 
 // The persistent GPU copy of the SDF scene and the CPU copy of what was last uploaded into it.
-// Capacities grow geometrically (at least double) when the frame needs more and shrink (to twice
-// the need) when more than four times larger than needed; a resized buffer is written in full.
+// Capacities start at 1.5 times the need, grow geometrically (at least double, at least 1.5 times
+// the need) when a frame needs more and shrink (to twice the need) when more than four times
+// larger than needed; a new or resized buffer is written in full.
 // The CPU copy is updated when the upload pass executes, so a frame whose graph never ran leaves
 // the next frame comparing against what really is on the GPU.
 class SdfSceneStore {
