@@ -29,7 +29,9 @@
 //                                  holds up to 65536 materials, the scene format's limit;
 //                                  b, a = SDF object index + 1 (low, high byte) / 255, 0 for
 //                                  meshes and the background (sdf_surface's object lookup; shadow
-//                                  and AO have their own targets, renderer/features/effects.h)
+//                                  and AO have their own targets, renderer/features/effects.h);
+//                                  objects from index 65535 on also store 0 (no object count
+//                                  limit: sdf_surface leaves those untextured)
 // mTec keeps an 8-bit id and an 8-bit SSS thickness in the r, g bytes; here the id takes both, and
 // subsurface thickness has its own target (effects.thickness, renderer/features/effects.h).
 // plus, outside the 96 bits (as in mTec: "other buffers"):
