@@ -80,7 +80,8 @@ TEST(BenchObjectsCli, BadFlagsExitTwoWithTheReason) {
         {"--counts 0", "--counts: '0' is not a count in [1, 100000]"},
         {"--counts 20,x", "--counts: 'x' is not a count"},
         {"--counts 20,,40", "--counts '20,,40': expected comma-separated object counts"},
-        {"--configs none,fast", "unknown configuration 'fast' (expected none, culling, id, world, all)"},
+        {"--configs none,fast",
+         "unknown configuration 'fast' (expected none, culling, id, world, all, prepass)"},
         {"--instancing maybe", "--instancing"},
         {"--moving 2", "--moving"},
         {"--backend metal", "--backend"},
@@ -131,8 +132,8 @@ TEST_P(WriteScene, LoadsWithEveryObjectInView) {
     const std::string dir = outDir(fmt::format("write_{}_{}", count, instanced));
     const std::string path = dir + "/sub/objects.json";
     const CliRun r = cli(fmt::format("bench objects --write-scene '{}' --count {}{}", path, count,
-                                  instanced ? "" : " --no-instancing"),
-                      dir);
+                                     instanced ? "" : " --no-instancing"),
+                         dir);
     ASSERT_EQ(r.status, 0) << r.output;
     assets::AssetManagerDesc desc;
     desc.cacheDir = std::string(PENUMBRA_BINARY_DIR) + "/tests/objects_scene_cache";
@@ -181,11 +182,12 @@ TEST_P(BenchObjectsRun, WritesTheTablesAndCsv) {
     if (!meshesPresent()) GTEST_SKIP() << "data/meshes missing (tools/fetch_meshes.sh)";
     const std::string backend = GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl";
     const std::string dir = outDir("run_" + backend);
-    const CliRun r = cli(fmt::format("bench objects --counts 2 --frames 1 --warmup 0 --width 64 --height 36 "
-                                  "--backend {} --moving 1 --csv '{}/o.csv' --markdown '{}/o.md' --cache-dir "
-                                  "'{}/tests/objects_scene_cache'",
-                                  backend, dir, dir, PENUMBRA_BINARY_DIR),
-                      dir);
+    const CliRun r =
+        cli(fmt::format("bench objects --counts 2 --frames 1 --warmup 0 --width 64 --height 36 "
+                        "--backend {} --moving 1 --csv '{}/o.csv' --markdown '{}/o.md' --cache-dir "
+                        "'{}/tests/objects_scene_cache'",
+                        backend, dir, dir, PENUMBRA_BINARY_DIR),
+            dir);
     ASSERT_EQ(r.status, 0) << r.output;
     const std::string md = readText(dir + "/o.md"), csv = readText(dir + "/o.csv");
     EXPECT_NE(md.find("| N | none | culling | id | world | all |"), std::string::npos) << md;

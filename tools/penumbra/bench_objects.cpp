@@ -49,6 +49,8 @@ bool configNamed(const std::string& name, Config& out) {
         a.worldCache = true;
     else if (name == "all")
         a.culling = a.worldCache = a.idField = true;
+    else if (name == "prepass")  // optional (issue 13 item 6): all + the cone prepass
+        a.culling = a.worldCache = a.idField = a.prepass = true;
     else if (name != "none")
         return false;
     out = {name, a};
@@ -249,7 +251,8 @@ CLI::App* addBenchObjectsCommand(CLI::App& group, BenchObjectsOptions& opt) {
         ->capture_default_str();
     cmd->add_option("--configs", opt.configs,
                     "Configurations, comma-separated: none (every toggle off), culling, id (idField only), "
-                    "world (worldCache only), all (culling + worldCache + idField)")
+                    "world (worldCache only), all (culling + worldCache + idField), prepass (all + the cone "
+                    "prepass; not in the default list)")
         ->capture_default_str();
     addBenchBackendOption(cmd, opt.backend);
     addSizeOption(cmd, "--width", opt.width, "Image width in pixels")->capture_default_str();
@@ -319,7 +322,7 @@ bool parseRunOptions(const BenchObjectsOptions& opt, std::vector<uint32_t>& coun
         Config c;
         if (!configNamed(w, c)) {
             error = fmt::format(
-                "--configs: unknown configuration '{}' (expected none, culling, id, world, all)", w);
+                "--configs: unknown configuration '{}' (expected none, culling, id, world, all, prepass)", w);
             return false;
         }
         configs.push_back(c);
@@ -490,9 +493,15 @@ std::string objectsMarkdown(const BenchObjectsOptions& opt, const std::vector<Ta
         md += "Shadow GPU ms (sdf_shadow + sdf_tile_cull_effects):\n\n";
         md += summary(
             t, configs, [](const Cell& c) { return c.shadow(); }, false);
+        md += "Shadow speed-up against none:\n\n";
+        md += summary(
+            t, configs, [](const Cell& c) { return c.shadow(); }, true);
         md += "AO GPU ms (sdf_ao):\n\n";
         md += summary(
             t, configs, [](const Cell& c) { return c.ao(); }, false);
+        md += "AO speed-up against none:\n\n";
+        md += summary(
+            t, configs, [](const Cell& c) { return c.ao(); }, true);
         md +=
             "Every pass (median GPU ms; – = the pass did not run; update share = (sdf_world_cache + "
             "sdf_object_scatter) / frame GPU):\n\n";
