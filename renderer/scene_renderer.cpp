@@ -47,6 +47,7 @@
 #include "renderer/features/sdf_scene.h"
 #include "renderer/features/sdf_surface.h"
 #include "renderer/features/sdf_trace.h"
+#include "renderer/features/sdf_world_cache.h"
 
 namespace penumbra::render {
 namespace {
@@ -169,6 +170,7 @@ struct SceneRenderer::Impl {
     std::unordered_set<uint64_t> warnedSdfs;  // SDF entities already warned about (once each)
     SdfSceneData sdfData;                     // read by sdf_upload's execute
     SdfAtlas atlas;                           // the fields of the frame's SdfRenderers
+    SdfWorldCache worldCache;                 // clipmapped world SDF + id field (issue 13)
     SdfSceneStore sdfStore;                   // the persistent SDF object array (delta updates)
     uint32_t shadowLayers = 0;                // layers of targets[kShadow]
     uint32_t warnedShadowWidth = 0;           // frame width last warned about for too many shadow layers
@@ -200,6 +202,7 @@ struct SceneRenderer::Impl {
           gpuCache(d),
           cache(d),
           atlas(d),
+          worldCache(d),
           sdfStore(d) {}
 
     ~Impl() {
@@ -271,6 +274,7 @@ struct SceneRenderer::Impl {
     void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
     void fillSdfData(const FrameGather& g);
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
+    void addWorldCache(FrameContext& fc, const FrameDesc& desc, const CameraSetup& cam);
     float debugDepthRange(const CameraSetup& cam, const FrameGather& g) const;
     std::vector<MeshDraw> importDraws(const FrameGather& g);
     // Material textures, each imported into this frame's graph once (meshes and sdf_surface share them).
@@ -882,6 +886,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g));
     if (!g.sdfs.empty()) {
         addSdfSceneUpload(fc, sdfData, sdfStore);
+        addWorldCache(fc, desc, cam);
         SdfTraceDesc trace;
         trace.settings = desc.settings.resolvedTrace();
         trace.raster = !g.sources.empty();
@@ -918,6 +923,17 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         addLighting(fc);
     }
     return transientBytes;
+}
+
+// The world SDF cache (renderer/features/sdf_world_cache.h) when the world cache or the id field
+// is on and the frame has SDF objects; otherwise its textures are freed.
+void SceneRenderer::Impl::addWorldCache(FrameContext& fc, const FrameDesc& desc, const CameraSetup& cam) {
+    const scene::AccelerationSettings& accel = desc.settings.acceleration;
+    std::string why;
+    if (!(accel.worldCache || accel.idField) || sdfData.objects.empty())
+        worldCache.release(graph);
+    else if (!worldCache.add(fc, sdfData.objects, cam.eye, accel, why))
+        log::warn("scene renderer: {} (the frame runs without the world cache)", why);
 }
 
 // The depth debug view spans the camera to the farthest drawn bounding sphere (meshes, bounded SDF
@@ -989,6 +1005,15 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
                 atlas.size().z,
                 atlas.texture() ? rhi::formatInfo(atlas.format()).name : "none"};
     if (board.has<SdfSceneBuffers>()) st.memory.sceneBuffers += board.find<SdfSceneBuffers>()->bytes;
+    if (g.sdfs.empty()) worldCache.release(graph);
+    if (board.has<SdfWorldCacheView>()) {
+        st.worldCache = worldCache.report();
+        st.memory.worldCache = board.find<SdfWorldCacheView>()->bytes;
+    }
+    if (!g.sdfs.empty()) {
+        const SdfSceneStore::Stats& up = sdfStore.stats();
+        st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
+    }
     keptBuffers.clear();
     if (const SdfCullLists* lists = board.find<SdfCullLists>()) {
         for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao}) st.tileListBytes += l->bytes;
@@ -998,10 +1023,6 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
             keptBuffers["sdf.tile_indices"] = {graph.physicalBuffer(lists->primary.indices),
                                                lists->primary.bytes - rangeBytes};
         }
-    }
-    if (!g.sdfs.empty()) {
-        const SdfSceneStore::Stats& up = sdfStore.stats();
-        st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
     }
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
@@ -1068,6 +1089,15 @@ bool SceneRenderer::readTarget(const std::string& name, std::vector<uint8_t>& te
         "' (gbuffer.depth, gbuffer.normal, gbuffer.material, gbuffer.velocity, gbuffer.albedo, gbuffer.aux, "
         "effects.shadow, effects.ao, effects.thickness, effects.reflection)";
     return false;
+}
+
+bool SceneRenderer::readWorldCache(WorldCacheReadback& out, std::string& error) {
+    Impl& s = *m_impl;
+    if (!s.haveFrame || !s.stats.worldCache.active) {
+        error = "scene renderer: readWorldCache: the last frame had no world cache";
+        return false;
+    }
+    return s.worldCache.readBack(s.graph, out, error);
 }
 
 bool SceneRenderer::readBuffer(const std::string& name, std::vector<uint8_t>& bytes, std::string& error) {

@@ -55,6 +55,7 @@
 #include "engine/scene/scene.h"
 #include "renderer/core/gbuffer_encoding.h"
 #include "renderer/features/debug_view.h"
+#include "renderer/features/world_cache_clipmap.h"
 #include "renderer/frame_graph/frame_graph.h"
 #include "rhi/device.h"
 
@@ -67,7 +68,10 @@ struct MemoryReport {
     uint64_t textures = 0;       // material textures
     uint64_t renderTargets = 0;  // G-buffer, depth, output (frame graph transients included)
     uint64_t sdfAtlas = 0;       // the 3D field atlas (renderer/features/sdf_atlas.h)
-    uint64_t total() const { return meshBuffers + sceneBuffers + textures + renderTargets + sdfAtlas; }
+    uint64_t worldCache = 0;     // world SDF cache textures + levels (renderer/features/sdf_world_cache.h)
+    uint64_t total() const {
+        return meshBuffers + sceneBuffers + textures + renderTargets + sdfAtlas + worldCache;
+    }
 };
 
 // The field atlas after the frame (zeros when no field was ever drawn).
@@ -108,6 +112,7 @@ struct FrameStats {
     AtlasReport atlas;
     EffectsReport effects;
     SdfUploadReport sdfUpload;
+    WorldCacheReport worldCache;  // the world SDF cache (inactive: off or no SDF objects)
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;
@@ -151,6 +156,9 @@ public:
     // (tests); false when the target was not part of the frame.
     bool readTarget(const std::string& name, std::vector<uint8_t>& texels, rhi::Format& format,
                     std::string& error);
+
+    // Reads back the whole world SDF cache of the last frame (tests); false when it did not run.
+    bool readWorldCache(WorldCacheReadback& out, std::string& error);
 
     // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices" (the
     // primary tile lists, renderer/features/sdf_cull.h, when the frame built them); false otherwise.

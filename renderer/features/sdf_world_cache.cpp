@@ -1,0 +1,225 @@
+#include "renderer/features/sdf_world_cache.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include <fmt/format.h>
+#include <shaders/sdf_world_cache_update.h>
+
+#include "renderer/features/scene_upload.h"
+
+namespace penumbra::render {
+namespace {
+
+namespace program = shaders::sdf_world_cache_update;
+constexpr uint32_t kMaxGroupsPerDispatch = 65535;
+
+struct UpdateData {
+    SdfSceneBuffers sdf;
+    SdfWorldCacheView view;
+    fg::BufferRef jobs, list;
+};
+
+rhi::SamplerHandle nearestSampler(GpuCache& cache) {
+    rhi::SamplerDesc d;  // integer textures need nearest filtering to be complete on GL
+    d.minFilter = d.magFilter = rhi::Filter::Nearest;
+    d.maxLod = 0.0f;
+    d.debugName = "sdf.cache";
+    return cache.sampler(d);
+}
+
+// One compute pass over jobs [first, first + count) of the frame's job buffer.
+void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uint32_t first, uint32_t count,
+                   uint32_t objectCount) {
+    const bool fields = in.sdf.atlas.isValid();
+    const rhi::ShaderDesc& cs =
+        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, in.sdf);
+    fc.graph.addPass<UpdateData>(
+        name, fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, UpdateData& d) {
+            d = in;
+            readSdfScene(b, d.sdf);
+            b.read(d.jobs, rhi::Access::ShaderRead);
+            b.read(d.list, rhi::Access::ShaderRead);
+            b.read(d.view.levels, rhi::Access::ShaderRead);
+            const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
+            b.write(d.view.distance, rw);
+            b.write(d.view.ids, rw);
+        },
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, first, count, objectCount](const UpdateData& d,
+                                                                                    fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            params.set("CacheJobs", ctx.buffer(d.jobs))
+                .set("CacheObjectList", ctx.buffer(d.list))
+                .set("CacheLevels", ctx.buffer(d.view.levels))
+                .setStorage("cacheDistanceImage", ctx.texture(d.view.distance))
+                .setStorage("cacheIdImage", ctx.texture(d.view.ids));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            for (uint32_t done = 0; done < count; done += kMaxGroupsPerDispatch) {
+                const program::PushConstants push{glm::uvec4(first + done, objectCount, 0u, 0u)};
+                ctx.cmd.pushConstants(&push, sizeof(push));
+                ctx.cmd.dispatch(std::min(kMaxGroupsPerDispatch, count - done));
+            }
+        });
+}
+
+}  // namespace
+
+void readSdfWorldCache(fg::PassBuilder& b, const SdfWorldCacheView& view) {
+    b.read(view.distance, rhi::Access::ShaderSampled);
+    b.read(view.ids, rhi::Access::ShaderSampled);
+    b.read(view.levels, rhi::Access::ShaderRead);
+}
+
+void setSdfWorldCache(ShaderParams& params, const fg::PassContext& ctx, const SdfWorldCacheView& view) {
+    params.set("sdfCacheDistance", ctx.texture(view.distance), view.sampler)
+        .set("sdfCacheIds", ctx.texture(view.ids), view.sampler)
+        .set("SdfCacheLevels", ctx.buffer(view.levels));
+}
+
+SdfWorldCache::~SdfWorldCache() {
+    if (m_distance) m_device.destroy(m_distance);
+    if (m_ids) m_device.destroy(m_ids);
+}
+
+void SdfWorldCache::destroyTextures(fg::FrameGraph& graph) {
+    for (rhi::TextureHandle* t : {&m_distance, &m_ids})
+        if (*t) {
+            graph.forgetPersistent(*t);
+            m_device.destroy(*t);
+            *t = {};
+        }
+    m_texLevels = m_texResolution = 0;
+}
+
+void SdfWorldCache::release(fg::FrameGraph& graph) {
+    destroyTextures(graph);
+    m_clipmap.reset();
+    m_report = {};
+}
+
+bool SdfWorldCache::ensureTextures(fg::FrameGraph& graph, std::string& error) {
+    const uint32_t r = m_clipmap.resolution(), levels = m_clipmap.levelCount();
+    if (m_distance && m_texLevels == levels && m_texResolution == r) return true;
+    destroyTextures(graph);
+    rhi::TextureDesc d;
+    d.dimension = rhi::TextureDimension::Tex3D;
+    d.width = d.height = r;
+    d.depthOrLayers = r * levels;
+    d.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::Storage | rhi::TextureUsage::CopySrc;
+    d.format = rhi::Format::R32_FLOAT;
+    d.debugName = "cache.distance";
+    m_distance = m_device.createTexture(d);
+    d.format = rhi::Format::R32_UINT;
+    d.debugName = "cache.ids";
+    m_ids = m_device.createTexture(d);
+    if (!m_distance || !m_ids) {
+        error = fmt::format("sdf world cache: creating two {}x{}x{} textures failed", r, r, r * levels);
+        release(graph);
+        return false;
+    }
+    m_texLevels = levels;
+    m_texResolution = r;
+    return true;
+}
+
+bool SdfWorldCache::add(FrameContext& fc, const std::vector<GpuSdfObject>& objects, glm::vec3 camera,
+                        const scene::AccelerationSettings& settings, std::string& error) {
+    m_objects.resize(objects.size());
+    for (size_t i = 0; i < objects.size(); ++i)
+        m_objects[i] = {objects[i].info.w, objects[i].model, glm::vec3(objects[i].boundsMin),
+                        glm::vec3(objects[i].boundsMax)};
+    const ClipmapSettings cs{settings.cacheLevels, settings.cacheResolution, settings.cacheVoxel,
+                             settings.cacheBudgetVoxels};
+    m_clipmap.update(cs, camera, m_objects);
+    if (m_clipmap.layoutChanged() || !m_distance) {
+        const bool hadTextures = m_distance.isValid();
+        if (!ensureTextures(fc.graph, error)) return false;
+        if (!hadTextures && !m_clipmap.layoutChanged()) {  // textures lost: fill everything again
+            m_clipmap.reset();
+            m_clipmap.update(cs, camera, m_objects);
+        }
+    }
+    const uint32_t levels = m_clipmap.levelCount(), r = m_clipmap.resolution();
+    m_levelsData.assign(16 + sizeof(CacheLevelGpu) * levels, 0);
+    const uint32_t header[4] = {levels, r, 0u, 0u};
+    std::memcpy(m_levelsData.data(), header, 16);
+    std::memcpy(m_levelsData.data() + 16, m_clipmap.levels().data(), sizeof(CacheLevelGpu) * levels);
+
+    const uint64_t texBytes = uint64_t(r) * r * r * levels * 4;
+    SdfWorldCacheView& view = fc.board.add<SdfWorldCacheView>();
+    view.distance = fc.graph.importPersistent("cache.distance", m_distance, rhi::Access::ShaderSampled);
+    view.ids = fc.graph.importPersistent("cache.ids", m_ids, rhi::Access::ShaderSampled);
+    view.levelCount = levels;
+    view.bytes = 2 * texBytes;
+    view.sampler = nearestSampler(fc.cache);
+    UpdateData in;
+    in.sdf = *fc.board.find<SdfSceneBuffers>();
+    const WorldCacheClipmap& cm = m_clipmap;
+    fc.graph.addPass<UpdateData>(
+        "sdf_world_cache_upload", fg::PassKind::Transfer,
+        [&](fg::PassBuilder& b, UpdateData& d) {
+            uint64_t bytes = 0;
+            d.view = view;
+            d.view.levels = uploadBuffer(b, "cache.levels", m_levelsData.size(), bytes);
+            d.jobs = uploadBuffer(b, "cache.jobs", std::max<uint64_t>(cm.jobs().size(), 1) * sizeof(CacheJob),
+                                  bytes);
+            d.list = uploadBuffer(b, "cache.list", std::max<uint64_t>(cm.objectList().size(), 1) * 4, bytes);
+            view.levels = d.view.levels;
+            view.bytes += m_levelsData.size();
+            in.view = d.view;
+            in.jobs = d.jobs;
+            in.list = d.list;
+        },
+        [this](const UpdateData& d, fg::PassContext& ctx) {
+            updateChunked(ctx.cmd, ctx.buffer(d.view.levels), m_levelsData.data(), m_levelsData.size());
+            const auto& jobs = m_clipmap.jobs();
+            const auto& list = m_clipmap.objectList();
+            if (!jobs.empty())
+                updateChunked(ctx.cmd, ctx.buffer(d.jobs), jobs.data(), jobs.size() * sizeof(CacheJob));
+            if (!list.empty()) updateChunked(ctx.cmd, ctx.buffer(d.list), list.data(), list.size() * 4);
+        });
+    const uint32_t splats = cm.splatJobCount(), total = uint32_t(cm.jobs().size());
+    const uint32_t objectCount = uint32_t(objects.size());
+    if (splats > 0) addUpdatePass(fc, "sdf_world_cache_splat", in, 0, splats, objectCount);
+    if (total > splats) addUpdatePass(fc, "sdf_world_cache", in, splats, total - splats, objectCount);
+
+    m_report = {};
+    m_report.active = true;
+    m_report.levels = levels;
+    m_report.resolution = r;
+    m_report.voxel = cm.voxel(0);
+    m_report.distanceBytes = m_report.idBytes = texBytes;
+    m_report.voxels = cm.stats();
+    m_report.jobs = total;
+    return true;
+}
+
+bool SdfWorldCache::readBack(const fg::FrameGraph& graph, WorldCacheReadback& out, std::string& error) const {
+    if (!m_report.active || !m_distance) {
+        error = "sdf world cache: did not run in the last frame";
+        return false;
+    }
+    std::vector<uint8_t> d, ids;
+    if (!m_device.readTexture(m_distance, {}, graph.persistentState(m_distance), d) ||
+        !m_device.readTexture(m_ids, {}, graph.persistentState(m_ids), ids)) {
+        error = "sdf world cache: reading the textures back failed";
+        return false;
+    }
+    out.resolution = m_clipmap.resolution();
+    out.levels = m_clipmap.levelCount();
+    out.levelInfo = m_clipmap.levels();
+    out.distance.resize(d.size() / 4);
+    std::memcpy(out.distance.data(), d.data(), out.distance.size() * 4);
+    out.objectKeys.clear();
+    for (const ClipmapObject& o : m_objects) out.objectKeys.push_back(o.key);
+    out.ids.resize(ids.size() / 4);
+    std::memcpy(out.ids.data(), ids.data(), out.ids.size() * 4);
+    return true;
+}
+
+}  // namespace penumbra::render

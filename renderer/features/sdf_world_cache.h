@@ -1,0 +1,79 @@
+// Feature "sdf_world_cache": the clipmapped world SDF + object-id field (issue 13 items 1 and 2,
+// after mTec 8.2.2 and Wright's global SDF clipmaps; renderer/features/world_cache_clipmap.h holds
+// the layout, the values, their margins and the update rule, renderer/shaders/sdf_world_cache.glsl
+// the lookup the trace and the effects use).
+//
+// Persistent R32F distance and R32UI id textures (R x R x R L, levels stacked in z), created here
+// and imported into each frame's graph (importPersistent); recreated when the layout changes. Per
+// frame: the transfer pass "sdf_world_cache_upload" writes the levels table, the jobs and their
+// object lists planned by WorldCacheClipmap; the compute passes "sdf_world_cache_splat" (the
+// immediate min-splats of changed objects) and then "sdf_world_cache" (scrolled-in slabs, whole
+// levels, queued dirty bricks within the budget) run one workgroup per job. The view is published
+// as SdfWorldCacheView; passes that use it are ordered after the update by the graph.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/vec3.hpp>
+
+#include "engine/scene/scene.h"
+#include "renderer/core/shader_params.h"
+#include "renderer/features/frame_context.h"
+#include "renderer/features/sdf_scene.h"
+#include "renderer/features/world_cache_clipmap.h"
+
+namespace penumbra::render {
+
+// Published on the blackboard when the cache ran this frame (absent when it is off or the frame
+// has no SDF objects).
+struct SdfWorldCacheView {
+    fg::TextureRef distance;  // R32F 3D, R x R x (R levelCount)
+    fg::TextureRef ids;       // R32UI 3D, same size
+    fg::BufferRef levels;     // uvec4 (count, R, 0, 0) + CacheLevelGpu[levelCount]
+    uint32_t levelCount = 0;
+    uint64_t bytes = 0;          // both textures + the levels buffer
+    rhi::SamplerHandle sampler;  // nearest (texelFetch only; GL needs it for integer textures)
+};
+
+// Declares the cache as a shader input (textures sampled, levels read).
+void readSdfWorldCache(fg::PassBuilder& b, const SdfWorldCacheView& view);
+// Binds sdfCacheDistance, sdfCacheIds (nearest sampler; the lookup uses texelFetch) and
+// SdfCacheLevels (renderer/shaders/sdf_world_cache.glsl).
+void setSdfWorldCache(ShaderParams& params, const fg::PassContext& ctx, const SdfWorldCacheView& view);
+
+class SdfWorldCache {
+public:
+    explicit SdfWorldCache(rhi::Device& device) : m_device(device) {}
+    ~SdfWorldCache();
+    SdfWorldCache(const SdfWorldCache&) = delete;
+    SdfWorldCache& operator=(const SdfWorldCache&) = delete;
+
+    // Plans and adds this frame's update passes; publishes SdfWorldCacheView. Call after
+    // addSdfSceneUpload (reads SdfSceneBuffers). `objects` must stay alive until the graph ran.
+    // False with `error` when the textures cannot be created (the frame goes on without a cache).
+    bool add(FrameContext& fc, const std::vector<GpuSdfObject>& objects, glm::vec3 camera,
+             const scene::AccelerationSettings& settings, std::string& error);
+    // The cache is off or the frame has no SDF objects: frees the textures.
+    void release(fg::FrameGraph& graph);
+
+    const WorldCacheReport& report() const { return m_report; }
+    const WorldCacheClipmap& clipmap() const { return m_clipmap; }
+    // Reads the whole cache back (tests); false when it did not run in the last frame.
+    bool readBack(const fg::FrameGraph& graph, WorldCacheReadback& out, std::string& error) const;
+
+private:
+    bool ensureTextures(fg::FrameGraph& graph, std::string& error);
+    void destroyTextures(fg::FrameGraph& graph);
+
+    rhi::Device& m_device;
+    WorldCacheClipmap m_clipmap;
+    rhi::TextureHandle m_distance, m_ids;
+    uint32_t m_texLevels = 0, m_texResolution = 0;
+    std::vector<ClipmapObject> m_objects;
+    std::vector<uint8_t> m_levelsData;  // header + levels, read by the upload pass
+    WorldCacheReport m_report;
+};
+
+}  // namespace penumbra::render

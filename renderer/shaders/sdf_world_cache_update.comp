@@ -1,0 +1,96 @@
+// sdf_world_cache_update: recomputes or splats boxes of the world SDF cache (renderer/features/
+// world_cache_clipmap.h documents the values and margins, sdf_world_cache.h the passes). One
+// workgroup per job (a box of at most 8^3 voxels of one level), one invocation per voxel:
+//   recompute: D = min(T, d_1) - margin over the job's objects (every object within T + slack of
+//              the box), id = the nearest when d_2 - d_1 >= sqrt(3) h + 2 slack and its distance is
+//              exact (analytic shapes under rigid motion and uniform scale), UNCERTAIN otherwise,
+//              NONE when d_1 >= T;
+//   splat:     D = min(D, d_1 - margin) over the job's (changed) objects, id = UNCERTAIN unless it
+//              was NONE and stays so (no listed object within T).
+// Distances are sdfObjectDistance(o, c, 1) of sdf_scene.glsl at the voxel centre c: conservative.
+#version 450
+#pragma penumbra_variants SDF_FIELDS
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
+
+#define SDF_SCENE_SET 2
+#define SDF_OBJECTS_BINDING 0
+#define SHAPE_RECORDS_BINDING 1
+#define SDF_FIELDS_BINDING 2
+#define SDF_ATLAS_BINDING 3
+#include "sdf_scene.glsl"
+#include "sdf_world_cache.glsl"
+
+struct CacheJob {
+    ivec4 origin;  // xyz first voxel, w level
+    uvec4 size;    // xyz voxels per axis, w mode (0 recompute, 1 splat)
+    uvec4 list;    // x first index into cacheObjectList, y count
+};
+layout(set = 2, binding = 4, std430) readonly buffer CacheJobs { CacheJob cacheJobs[]; };
+layout(set = 2, binding = 5, std430) readonly buffer CacheObjectList { uint cacheObjectList[]; };
+layout(set = 2, binding = 6, std430) readonly buffer CacheLevels {
+    uvec4 cacheInfo;  // x level count, y resolution R
+    SdfCacheLevel cacheLevels[];
+};
+layout(set = 2, binding = 7, r32f) uniform image3D cacheDistanceImage;
+layout(set = 2, binding = 8, r32ui) uniform uimage3D cacheIdImage;
+
+layout(push_constant) uniform SdfWorldCacheUpdate {
+    uvec4 jobs;  // x first job of this dispatch, y object count of the frame
+} pc;
+
+const uint kModeSplat = 1u;
+
+// The object's world distance is exact (not only a bound) when it is an analytic shape and its
+// model is a rotation times a uniform scale (sdf_scene.glsl: sigma_min is then the scale).
+bool exactDistance(uint o) {
+    if (sdfObjects[o].info.x != SDF_KIND_SHAPES) return false;
+    const mat3 m = mat3(sdfObjects[o].model);
+    const mat3 g = transpose(m) * m;
+    const float s2 = max(max(g[0][0], g[1][1]), g[2][2]);
+    const float tol = 1e-4 * s2;
+    return abs(g[0][0] - s2) <= tol && abs(g[1][1] - s2) <= tol && abs(g[2][2] - s2) <= tol &&
+           abs(g[0][1]) <= tol && abs(g[0][2]) <= tol && abs(g[1][2]) <= tol;
+}
+
+void main() {
+    const CacheJob job = cacheJobs[pc.jobs.x + gl_WorkGroupID.x];
+    const uvec3 local = gl_LocalInvocationID;
+    if (any(greaterThanEqual(local, job.size.xyz))) return;
+    const uint level = uint(job.origin.w);
+    const int r = int(cacheInfo.y);
+    const SdfCacheLevel lv = cacheLevels[level];
+    const float h = lv.params.x, truncation = lv.params.y, margin = lv.params.z, slack = lv.params.w;
+    const ivec3 v = job.origin.xyz + ivec3(local);
+    ivec3 t = v - lv.origin.xyz + lv.wrap.xyz;
+    t -= ivec3(greaterThanEqual(t, ivec3(r))) * r;
+    t.z += lv.origin.w;
+    const vec3 c = (vec3(v) + 0.5) * h;
+
+    float d1 = truncation, d2 = truncation;
+    uint nearest = SDF_CACHE_NONE;
+    for (uint k = 0u; k < job.list.y; ++k) {
+        const uint o = cacheObjectList[job.list.x + k];
+        if (o >= pc.jobs.y) continue;
+        const float d = sdfObjectDistance(o, c, 1.0);
+        if (d < d1) {
+            d2 = d1;
+            d1 = d;
+            nearest = o;
+        } else {
+            d2 = min(d2, d);
+        }
+    }
+    if (job.size.w == kModeSplat) {
+        const float old = imageLoad(cacheDistanceImage, t).x;
+        const uint oldId = imageLoad(cacheIdImage, t).x;
+        imageStore(cacheDistanceImage, t, vec4(min(old, d1 - margin)));
+        const bool none = oldId == SDF_CACHE_NONE && nearest == SDF_CACHE_NONE;
+        imageStore(cacheIdImage, t, uvec4(none ? SDF_CACHE_NONE : SDF_CACHE_UNCERTAIN));
+        return;
+    }
+    uint id = nearest;
+    if (nearest != SDF_CACHE_NONE && !(d2 - d1 >= 1.7320509 * h + 2.0 * slack && exactDistance(nearest)))
+        id = SDF_CACHE_UNCERTAIN;
+    imageStore(cacheDistanceImage, t, vec4(d1 - margin));
+    imageStore(cacheIdImage, t, uvec4(id));
+}
