@@ -87,9 +87,19 @@ public:
         rhi::CommandList& cmd = m_device.beginCommandList("sdf store test");
         m_graph.execute(cmd);
         m_device.submit(cmd);
+        m_timings = m_graph.collectTimings();
         m_device.waitIdle();
-        m_graph.pollTimings();
         return true;
+    }
+    // GPU and recording (CPU) milliseconds of the last frame's upload passes together.
+    std::pair<double, double> uploadMs() const {
+        double gpu = 0.0, cpu = 0.0;
+        for (const fg::PassTiming& t : m_timings)
+            if (t.name == "sdf_upload" || t.name == "sdf_object_scatter") {
+                gpu += t.gpuMs;
+                cpu += t.cpuMs;
+            }
+        return {gpu, cpu};
     }
     // The first `count` objects of the persistent buffer.
     std::vector<GpuSdfObject> read(size_t count) {
@@ -108,6 +118,7 @@ private:
     render::GpuCache m_cache;
     render::Blackboard m_board;
     render::SdfSceneStore m_store;
+    std::vector<fg::PassTiming> m_timings;
 };
 
 class SdfInstancing : public GpuTest {};
@@ -219,6 +230,45 @@ TEST_P(SdfInstancing, StoreUploadsOnlyWhatChanged) {
     data.tracedCount = 0;
     st = step("no objects");
     EXPECT_EQ(st.objectsUploaded, 0u);
+}
+
+// The cost behind the full-rewrite threshold (more than half changed: one plain upload), printed
+// for docs; only the upload paths are asserted (times never are). 8192 objects; each row changes
+// a fraction of them (distinct objects every frame) and reports the median of 3 frames.
+TEST_P(SdfInstancing, DeltaAndFullUploadCost) {
+    constexpr uint32_t n = 8192;
+    StoreHarness h(dev());
+    render::SdfSceneData data;
+    data.records.resize(1);
+    std::vector<uint32_t> versions(n, 0);
+    auto rebuild = [&] {
+        data.objects.clear();
+        for (uint32_t i = 0; i < n; ++i) data.objects.push_back(syntheticObject(i, versions[i]));
+        data.tracedCount = n;
+    };
+    std::vector<std::string> passes;
+    rebuild();
+    ASSERT_TRUE(h.frame(data, passes));  // the first, full upload
+    uint32_t round = 0;
+    for (uint32_t changed : {n / 64, n / 8, n / 4, n / 2, n / 2 + 1, n}) {
+        std::vector<double> gpu, cpu;
+        for (int k = 0; k < 3; ++k, ++round) {
+            for (uint32_t i = 0; i < changed; ++i) ++versions[(i + round * 997u) % n];
+            rebuild();
+            ASSERT_TRUE(h.frame(data, passes));
+            const auto [g, c] = h.uploadMs();
+            gpu.push_back(g);
+            cpu.push_back(c);
+            EXPECT_EQ(h.store().stats().objectsUploaded, changed > n / 2 ? n : changed);
+            EXPECT_EQ(h.store().stats().fullUpload, changed > n / 2);
+        }
+        std::sort(gpu.begin(), gpu.end());
+        std::sort(cpu.begin(), cpu.end());
+        const auto& st = h.store().stats();
+        std::printf("  %5u of %u changed: %s, %8llu B sent, upload passes GPU %.3f ms, recording %.3f ms\n",
+                    changed, n, st.fullUpload ? "full " : "delta", (unsigned long long)st.uploadBytes, gpu[1],
+                    cpu[1]);
+    }
 }
 
 // ---- scenes ----------------------------------------------------------------------------------------
