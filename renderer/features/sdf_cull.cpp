@@ -24,7 +24,8 @@ static_assert(offsetof(GpuSdfObject, boundsMax) == offsetof(program::SdfObject, 
 
 bool unbounded(const GpuSdfObject& o) {
     for (int a = 0; a < 3; ++a)
-        if (std::abs(o.boundsMin[a]) >= 0.5f * kSdfUnbounded || std::abs(o.boundsMax[a]) >= 0.5f * kSdfUnbounded)
+        if (std::abs(o.boundsMin[a]) >= 0.5f * kSdfUnbounded ||
+            std::abs(o.boundsMax[a]) >= 0.5f * kSdfUnbounded)
             return true;
     return false;
 }
@@ -56,7 +57,8 @@ uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_
     const glm::dmat4 proj(desc.projMatrix);
     glm::dvec2 pmin(1e300), pmax(-1e300);
     for (int c = 0; c < 8; ++c) {
-        const glm::dvec3 corner = centre + radius * glm::dvec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
+        const glm::dvec3 corner =
+            centre + radius * glm::dvec3(c & 1 ? 1 : -1, c & 2 ? 1 : -1, c & 4 ? 1 : -1);
         const glm::dvec4 clip = proj * glm::dvec4(corner, 1.0);
         const glm::dvec2 pixel = (glm::dvec2(clip) / clip.w * 0.5 + 0.5) * glm::dvec2(width, height);
         pmin = glm::min(pmin, pixel);
