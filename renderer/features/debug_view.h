@@ -27,6 +27,11 @@
 //                resolution target (renderer/features/effects.h); when the effect did not run (AO
 //                off, no shadowed light, no subsurface material, no SDF object) they show what the
 //                lighting pass uses instead: AO and shadow white, the shading normal, thickness black.
+//   tiles        the length n of each 8x8 tile's primary object list (SdfCullLists::primary,
+//                renderer/features/sdf_cull.h; the scene renderer builds it for this view even with
+//                culling off) through the steps ramp at s = log2(1 + n) / log2(1 + N), N the traced
+//                objects: 0 black, N red; the "all objects" fallback (count 0xffffffff) magenta;
+//                black everywhere when the frame traces no SDF object
 //   field-slice  the pass "debug_field_slice" (renderer/features/debug_field_slice.h) instead of
 //                this one: the signed distance of the SDF scene on a plane
 // Ids and steps read gbuffer.aux: the scene renderer writes it for them (frameNeedsAux) whether or
@@ -46,7 +51,7 @@ namespace penumbra::render {
 
 // The enumeration and its names live with the scene settings (render.debugView); these are the same
 // functions: "none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao", "shadow",
-// "bentnormal", "thickness".
+// "bentnormal", "thickness", "tiles".
 using scene::DebugView;
 using scene::parseDebugView;
 using scene::toString;
