@@ -7,7 +7,9 @@
 //              NONE when d_1 >= T;
 //   splat:     D = min(D, d_1 - margin) over the job's (changed) objects, id = UNCERTAIN unless it
 //              was NONE and stays so (no listed object within T).
-// Distances are sdfObjectDistance(o, c, 1) of sdf_scene.glsl at the voxel centre c: conservative.
+// Distances are sdfObjectDistance(o, c, 1) at the voxel centre c (sdf_scene.glsl), raised outside
+// the object's bounds box to the distance to that box: both are lower bounds of the distance to
+// the solid, which lies in the box.
 #version 450
 #pragma penumbra_variants SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
@@ -71,7 +73,15 @@ void main() {
     for (uint k = 0u; k < job.list.y; ++k) {
         const uint o = cacheObjectList[job.list.x + k];
         if (o >= pc.jobs.y) continue;
-        const float d = sdfObjectDistance(o, c, 1.0);
+        // The solid lies in its bounds box, so outside the box (box > 0) the box distance is a lower
+        // bound as well: an object whose box is at least d_2 away changes neither d_1 nor d_2 and is
+        // not evaluated, and every evaluated distance is raised to its box distance (so the result
+        // does not depend on the order of the list). Inside the box (box = 0) the signed distance
+        // is kept as it is.
+        const float box = sdfBoxDistance(o, sdfToLocal(o, c));
+        if (box >= d2) continue;
+        const float own = sdfObjectDistance(o, c, 1.0);
+        const float d = box > 0.0 ? max(own, box) : own;
         if (d < d1) {
             d2 = d1;
             d1 = d;

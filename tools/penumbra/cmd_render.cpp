@@ -89,7 +89,8 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
     j["passes"] = passes;
     j["memory"] = {{"meshBuffers", stats.memory.meshBuffers}, {"sceneBuffers", stats.memory.sceneBuffers},
                    {"textures", stats.memory.textures},       {"renderTargets", stats.memory.renderTargets},
-                   {"sdfAtlas", stats.memory.sdfAtlas},       {"total", stats.memory.total()}};
+                   {"sdfAtlas", stats.memory.sdfAtlas},       {"worldCache", stats.memory.worldCache},
+                   {"total", stats.memory.total()}};
     j["sdfAtlas"] = {{"bytes", stats.atlas.bytes},
                      {"fill", jsonNumber(stats.atlas.fill)},
                      {"slots", stats.atlas.slots},
@@ -104,6 +105,20 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                     {"thickness", stats.effects.thickness},       {"reflection", stats.effects.reflection},
                     {"targetBytes", stats.effects.targetBytes},   {"lowResBytes", stats.effects.lowResBytes}};
     j["tileListBytes"] = stats.tileListBytes;
+    const render::WorldCacheReport& wc = stats.worldCache;  // renderer/features/sdf_world_cache.h
+    j["worldCache"] = {{"active", wc.active},
+                       {"levels", wc.levels},
+                       {"resolution", wc.resolution},
+                       {"voxel", jsonNumber(wc.voxel)},
+                       {"distanceBytes", wc.distanceBytes},
+                       {"idBytes", wc.idBytes},
+                       {"fullVoxels", wc.voxels.fullVoxels},
+                       {"scrollVoxels", wc.voxels.scrollVoxels},
+                       {"dirtyVoxels", wc.voxels.dirtyVoxels},
+                       {"splatVoxels", wc.voxels.splatVoxels},
+                       {"queuedVoxels", wc.voxels.queuedVoxels},
+                       {"changedObjects", wc.voxels.changedObjects},
+                       {"jobs", wc.jobs}};
     j["counts"] = {{"entities", world.aliveCount()},
                    {"meshRenderers", world.count<ecs::MeshRenderer>()},
                    {"cameras", world.count<ecs::Camera>()},
