@@ -145,6 +145,10 @@ bool SdfSceneStore::reserve(fg::FrameGraph& graph, Buffer& b, uint64_t bytes, co
     const uint64_t headroom = bytes + bytes / 2;
     uint64_t capacity = !b.handle ? headroom : !fits ? std::max(headroom, 2 * b.capacity) : 2 * bytes;
     capacity = (std::max(capacity, minimum) + element - 1) / element * element;
+    // The headroom never takes a buffer past what one binding may cover (maxStorageBufferRange):
+    // the object count is bounded by the device's limit only, not by the growth policy.
+    const uint64_t limit = m_device.info().limits.maxStorageBufferRange / element * element;
+    if (limit > 0) capacity = std::max(bytes, std::min(capacity, limit));
     destroy(graph, b);
     rhi::BufferDesc desc;
     desc.size = capacity;
@@ -210,6 +214,12 @@ bool SdfSceneStore::plan(fg::FrameGraph& graph, const SdfSceneData& data) {
     const bool newRecords = reserve(graph, m_records, m_recordBytes, "sdf.records");
     const bool newFields = data.hasFields() && reserve(graph, m_fields, fieldBytes, "sdf.fields");
     m_stats = {};
+    const uint64_t limit = m_device.info().limits.maxStorageBufferRange;
+    if (limit > 0 && arrayBytes(data.objects) > limit)
+        log::warn(
+            "sdf_upload: {} SDF objects need {} bytes, more than the device's storage buffer range ({} "
+            "bytes, {} objects): the passes cannot bind them",
+            n, arrayBytes(data.objects), limit, limit / kObjectBytes);
     if (!m_objects.handle || !m_records.handle || (data.hasFields() && !m_fields.handle)) return false;
 
     findChangedObjects(data.objects, m_objects.shadow, m_changed);  // a new buffer has no shadow

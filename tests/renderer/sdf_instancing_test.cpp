@@ -571,6 +571,10 @@ TEST_P(SdfInstancing, ThousandDistinctProgramsRender) {
         centres.push_back(c);
     }
     EXPECT_EQ(s.assets.count(assets::AssetKind::ShapeProgram), 1000u);
+    // The only bound on the object count: one storage binding of the array (informational).
+    std::printf("  device storage buffer range %llu B: up to %llu SDF objects\n",
+                (unsigned long long)dev().info().limits.maxStorageBufferRange,
+                (unsigned long long)(dev().info().limits.maxStorageBufferRange / sizeof(GpuSdfObject)));
     SceneRenderer r(dev());
     const FrameDesc d = s.frame(kGoldenW, kGoldenH);
     ImageRGBA8 image;
