@@ -893,6 +893,8 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.nearPlane = cam.nearPlane;
         trace.farPlane = cam.farPlane;
         trace.footprint = 2.0f / (float(desc.height) * std::abs(cam.proj[1][1]));
+        trace.accel = desc.settings.acceleration;
+        trace.countEvaluations = desc.auxEvaluations;
         // Per-tile lists of the traced objects (the tiles debug view shows them whatever the toggle).
         if (g.tracedSdfs > 0 && (desc.settings.acceleration.culling || view == DebugView::Tiles))
             addSdfTileCull(fc, {std::span(sdfData.objects).first(sdfData.tracedCount), cam.view, cam.proj,

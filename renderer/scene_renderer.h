@@ -135,6 +135,9 @@ struct FrameDesc {
     // Ids and steps make the frame write gbuffer.aux whatever `aux` says.
     DebugView debugView = DebugView::None;
     bool aux = false;  // also write gbuffer.aux (entity index, trace steps) for AOVs and debug views
+    // gbuffer.aux y counts the trace's object distance evaluations instead of its steps (tests and
+    // benchmarks of the acceleration: the work culling, world cache and id field save).
+    bool auxEvaluations = false;
 };
 
 class SceneRenderer {

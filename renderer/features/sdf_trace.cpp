@@ -3,9 +3,59 @@
 #include <shaders/sdf_trace.h>
 
 #include "renderer/core/shader_params.h"
+#include "renderer/features/sdf_cull.h"
 #include "renderer/features/sdf_scene.h"
+#include "renderer/features/sdf_world_cache.h"
 
 namespace penumbra::render {
+
+namespace {
+
+// trace.accel.x in sdf_trace.comp.
+enum : uint32_t {
+    kCullFlag = 1,
+    kCacheFlag = 2,
+    kIdFlag = 4,
+    kTileListsFlag = 8,
+    kCountEvalsFlag = 16,
+    kCacheBoundFlag = 32,
+};
+
+// Without the world cache the shader never samples it, but every declared resource needs a
+// binding: 1x1x1 distance and id textures and a levels buffer with a level count of 0, made by a
+// small transfer pass (a transient must be written before it is read).
+SdfWorldCacheView addCacheStandIn(FrameContext& fc) {
+    struct Data {
+        SdfWorldCacheView view;
+    };
+    const auto& data = fc.graph.addPass<Data>(
+        "sdf_trace_cache_stand_in", fg::PassKind::Transfer,
+        [](fg::PassBuilder& b, Data& d) {
+            rhi::TextureDesc tex;
+            tex.dimension = rhi::TextureDimension::Tex3D;
+            tex.format = rhi::Format::R32_FLOAT;
+            tex.debugName = "sdf_trace.cache_distance_stand_in";
+            d.view.distance = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
+            tex.format = rhi::Format::R32_UINT;
+            tex.debugName = "sdf_trace.cache_ids_stand_in";
+            d.view.ids = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
+            rhi::BufferDesc buf;
+            buf.size = 16;
+            buf.debugName = "sdf_trace.cache_levels_stand_in";
+            d.view.levels = b.write(b.createBuffer(buf.debugName, buf), rhi::Access::CopyDst);
+        },
+        [](const Data& d, fg::PassContext& ctx) {
+            // The texels stay undefined: they are never read (no kCacheBoundFlag).
+            ctx.cmd.fillBuffer(ctx.buffer(d.view.levels), 0, 16, 0u);
+        });
+    SdfWorldCacheView view = data.view;
+    rhi::SamplerDesc nearest;
+    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
+    view.sampler = fc.cache.sampler(nearest);
+    return view;
+}
+
+}  // namespace
 
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     namespace program = shaders::sdf_trace;
@@ -13,6 +63,8 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
         GBuffer gb;
+        SdfTileLists tiles;       // invalid: the shader loops over every traced object
+        SdfWorldCacheView cache;  // the world cache, or stand-ins the shader never samples
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
@@ -27,10 +79,21 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
     const scene::TraceSettings& s = desc.settings;
+    const SdfCullLists* cullLists = fc.board.find<SdfCullLists>();
+    const bool tiles = desc.accel.culling && cullLists && cullLists->primary.valid();
+    const SdfTileLists tileLists = tiles ? cullLists->primary : SdfTileLists{};
+    const SdfWorldCacheView* cacheView = fc.board.find<SdfWorldCacheView>();
+    const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheView;
+    const SdfWorldCacheView cacheIn = cacheBound ? *cacheView : addCacheStandIn(fc);
+    const uint32_t flags = (desc.accel.culling ? kCullFlag : 0u) | (tiles ? kTileListsFlag : 0u) |
+                           (desc.countEvaluations ? kCountEvalsFlag : 0u) |
+                           (desc.accel.worldCache ? kCacheFlag : 0u) | (desc.accel.idField ? kIdFlag : 0u) |
+                           (cacheBound ? kCacheBoundFlag : 0u);
     const program::PushConstants push{
         glm::uvec4(sdfScene.tracedCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
         glm::vec4(s.hitEpsilon, s.normalEpsilon, s.overRelaxation, s.fieldSafety),
-        glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f)};
+        glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f),
+        glm::uvec4(flags, tileLists.tilesX, 0u, 0u)};
     const uint32_t width = fc.width, height = fc.height;
     fc.graph.addPass<Data>(
         "sdf_trace", fg::PassKind::Compute,
@@ -38,6 +101,8 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             d.scene = *fc.board.find<SceneBuffers>();
             d.sdf = sdfScene;
             d.gb = gbuffer;
+            d.tiles = tileLists;
+            d.cache = cacheIn;
             const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
             for (fg::TextureRef t :
                  {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo, d.gb.aux})
@@ -45,6 +110,11 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
+            if (d.tiles.valid()) {
+                b.read(d.tiles.ranges, rhi::Access::ShaderRead);
+                b.read(d.tiles.indices, rhi::Access::ShaderRead);
+            }
+            readSdfWorldCache(b, d.cache);
         },
         [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux](const Data& d,
                                                                                       fg::PassContext& ctx) {
@@ -60,6 +130,12 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                     .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
             if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
             setSdfScene(params, ctx, d.sdf, sampler);
+            // Without tile lists the shader never reads them, but every declared buffer needs a
+            // binding: the object buffer stands in (read-only, already declared by this pass).
+            const bool lists = d.tiles.valid();
+            params.set("SdfTileRanges", ctx.buffer(lists ? d.tiles.ranges : d.sdf.objects))
+                .set("SdfTileIndices", ctx.buffer(lists ? d.tiles.indices : d.sdf.objects));
+            setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);

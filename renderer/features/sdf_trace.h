@@ -21,6 +21,16 @@
 //                   never steps through the baked surface, 0 trusts the interpolated value
 //   refineSteps     after a hit, steps on the raw distance of the hit object (a plain step, then
 //                   secant steps along the ray; each at most one voxel) onto its surface
+//
+// Acceleration (scene::AccelerationSettings; each toggle changes speed only, the picture stays
+// within the parity rule of the unaccelerated trace: tests/renderer/sdf_accel_parity_test.cpp):
+//   culling         the pixel's tile list (SdfCullLists::primary on the blackboard, every traced
+//                   object without it) narrowed to the boxes the ray crosses; off: every traced
+//                   object at every step (mTec's "no optimization"; the march interval, from the
+//                   first box entry, is the same either way)
+//   worldCache      (SdfWorldCacheView) plain safe steps of the cached world distance far from
+//                   surfaces (above two voxels and two hit epsilons), no object evaluated
+//   idField         near surfaces only the object the id field names for the point's cell
 #pragma once
 
 #include "engine/scene/scene.h"
@@ -30,14 +40,17 @@ namespace penumbra::render {
 
 struct SdfTraceDesc {
     scene::TraceSettings settings;
-    bool raster = false;       // the mesh pass wrote the G-buffer first (bounded trace)
-    float nearPlane = 0.1f;    // linear depth where rays start
-    float farPlane = 1000.0f;  // linear depth where rays end when no mesh is nearer
-    float footprint = 0.0f;    // pixel size per unit distance: 2 / (height * proj[1][1])
+    bool raster = false;                // the mesh pass wrote the G-buffer first (bounded trace)
+    float nearPlane = 0.1f;             // linear depth where rays start
+    float farPlane = 1000.0f;           // linear depth where rays end when no mesh is nearer
+    float footprint = 0.0f;             // pixel size per unit distance: 2 / (height * proj[1][1])
+    scene::AccelerationSettings accel;  // culling, world cache, id field (prepass: not used here)
+    bool countEvaluations = false;      // gbuffer.aux y = object evaluations instead of steps
 };
 
-// Adds the pass. Reads SceneBuffers (view; materials when the frame has albedo) and
-// SdfSceneBuffers; reads and writes the GBuffer as storage images.
+// Adds the pass. Reads SceneBuffers (view; materials when the frame has albedo), SdfSceneBuffers
+// and, when present and enabled, SdfCullLists::primary and SdfWorldCacheView; reads and writes the
+// GBuffer as storage images.
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc);
 
 }  // namespace penumbra::render

@@ -4,10 +4,15 @@
 //  1. the camera ray through the pixel centre; its interval ends at the rasterized depth when a mesh
 //     pass ran (RASTER flag: the trace is bounded by the raster depth, so meshes and SDFs occlude
 //     each other correctly), else at the far plane;
-//  2. culling: every object's local bounds box is intersected with the ray; objects it misses are
-//     never evaluated, and an object is dropped once a step starts past its box. Up to
-//     kListSize objects are kept in a per-pixel list; a ray crossing more boxes traces the rest
-//     from the full object array (correct, slower);
+//  2. culling (acceleration flag CULL, scene::AccelerationSettings::culling): the candidate objects
+//     are the pixel's 8x8 tile list (sdf_tiles.glsl, built by sdf_cull; every traced object when
+//     the frame has no lists); each one's local bounds box is intersected with the ray, objects it
+//     misses are never evaluated, the march starts at the first box entry, and an object is
+//     dropped once a step starts past its box or when its box is farther than the best distance
+//     so far. Up to kListSize objects are kept in a per-pixel list; a ray crossing more boxes
+//     evaluates the whole tile list (correct, slower). Without CULL every object [0, tracedCount)
+//     is evaluated at every step (mTec's "no optimization" baseline); the march interval (first
+//     box entry on, none when the ray crosses no box) is the same either way;
 //  3. sphere tracing with over-relaxation (Keinert et al. 2014): steps of omega * d while the
 //     unbounding spheres of consecutive points overlap; when they do not, the step returns to the
 //     previous point plus its plain (safe) step and omega becomes 1 for the rest of the ray;
@@ -28,6 +33,15 @@
 //     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
 //     distance from the origin, for float precision, and for fields at least half a voxel);
 //     velocity from the object's previous model.
+// World cache (flags CACHE, ID; sdf_world_cache.glsl, built by sdf_world_cache): at each step
+// whose point lies in a clipmap level, a cached distance above two voxels and two hit epsilons is
+// taken as a plain safe step with no object evaluated (such steps have their own limit and do not
+// count against the step limit); nearer, when the id field names a traced object for the point's
+// cell, that object alone is evaluated (it is the nearest everywhere in the cell); otherwise the
+// list (or every object). With ID but not CACHE only the id part is used.
+// gbuffer.aux y counts the steps that evaluated objects (at most the step limit; cache steps are
+// not counted), or (flag COUNT_EVALUATIONS, tests and benchmarks) the object distance evaluations
+// of the pixel: the work the acceleration saves.
 #version 450
 #pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8) in;
@@ -41,6 +55,17 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SDF_FIELDS_BINDING 8
 #define SDF_ATLAS_BINDING 9
 #include "sdf_scene.glsl"
+
+#define SDF_TILES_SET 2
+#define SDF_TILE_RANGES_BINDING 10
+#define SDF_TILE_INDICES_BINDING 11
+#include "sdf_tiles.glsl"
+
+#define SDF_CACHE_SET 2
+#define SDF_CACHE_DISTANCE_BINDING 12
+#define SDF_CACHE_IDS_BINDING 13
+#define SDF_CACHE_LEVELS_BINDING 14
+#include "sdf_world_cache.glsl"
 
 layout(set = 2, binding = 0, r32f) uniform image2D gbufferDepthImage;
 layout(set = 2, binding = 1, rg16f) uniform image2D gbufferNormalImage;
@@ -59,37 +84,59 @@ layout(push_constant) uniform SdfTrace {
     vec4 epsilons;   // x hit epsilon, y normal epsilon (pixel footprints), z over-relaxation omega,
                      // w field safety factor
     vec4 clip;       // x near, y far (linear depth), z pixel footprint per unit of distance
+    uvec4 accel;     // x acceleration flags (k*Flag below), y tiles per row of the tile lists
 } trace;
 
 const uint kRasterFlag = 1u;
+// trace.accel.x
+const uint kCullFlag = 1u;        // bounds culling (tile list, per-pixel ray/box list)
+const uint kCacheFlag = 2u;       // world cache distance steps far from surfaces
+const uint kIdFlag = 4u;          // id field: near a surface evaluate the one object it names
+const uint kTileListsFlag = 8u;   // SdfTileRanges / SdfTileIndices hold this frame's primary lists
+const uint kCountEvalsFlag = 16u;  // gbuffer.aux y = object evaluations instead of steps
+const uint kCacheBoundFlag = 32u;  // the world cache is bound (else stand-ins that are never read)
 const int kListSize = 24;
 
 uint g_list[kListSize];
 vec2 g_interval[kListSize];
 int g_count;
 bool g_overflow;
+// The pixel's candidate objects with culling: its tile list, or every traced object (g_tileAll).
+uint g_tileFirst, g_tileCount;
+bool g_tileAll;
+uint g_evaluations;  // object distance evaluations of this pixel (kCountEvalsFlag)
+
+uint tileObject(uint i) { return g_tileAll ? i : sdfTileIndices[g_tileFirst + i]; }
 
 // Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
-// of the other objects' distances. Objects whose box the
-// ray had left before `tFrom` (the point the last step started from) are skipped: the step from
-// tFrom to here may have crossed a box the current point is already past, and the over-relaxation
-// check needs every surface near that segment. An object whose box is farther than the best
-// distance so far is not evaluated. (Each call site of the distance code is inlined by the
-// compiler, so the shader keeps few of them: this loop, the normal's and the refinement's.)
-float sceneDistance(vec3 p, float tFrom, float safety, out uint nearest, out float second) {
+// of the other objects' distances. `only` (the id field's object for p's cell, else 0xffffffff) is
+// the nearest object everywhere around p: it alone is evaluated and bounds the others too. With
+// culling, objects whose box the ray had left before `tFrom` (the point the last step started from)
+// are skipped: the step from tFrom to here may have crossed a box the current point is already
+// past, and the over-relaxation check needs every surface near that segment; an object whose box
+// is farther than the best distance so far is not evaluated. Without culling every traced object
+// is evaluated. (Each call site of the distance code is inlined by the compiler, so the shader
+// keeps few of them: this loop, the normal's and the refinement's.)
+float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
-    int count = g_overflow ? int(trace.counts.x) : g_count;
-    for (int i = 0; i < count; ++i) {
-        if (!g_overflow && tFrom > g_interval[i].y) continue;  // the ray had left this box for good
-        uint obj = g_overflow ? uint(i) : g_list[i];
+    bool one = only != 0xffffffffu;
+    bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
+    bool list = cull && !g_overflow;
+    uint count = one ? 1u : (list ? uint(g_count) : (cull ? g_tileCount : trace.counts.x));
+    for (uint i = 0u; i < count; ++i) {
+        if (list && tFrom > g_interval[i].y) continue;  // the ray had left this box for good
+        uint obj = one ? only : (list ? g_list[i] : (cull ? tileObject(i) : i));
         vec3 pl = sdfToLocal(obj, p);
-        float box = sdfBoxDistance(obj, pl);
-        if (box >= d) {  // cannot be nearer than the best so far; its box bounds `second`
-            second = min(second, box);
-            continue;
+        if (cull) {
+            float box = sdfBoxDistance(obj, pl);
+            if (box >= d) {  // cannot be nearer than the best so far; its box bounds `second`
+                second = min(second, box);
+                continue;
+            }
         }
+        ++g_evaluations;
         float di = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, safety);
         if (di < d) {
             second = d;
@@ -99,6 +146,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, out uint nearest, out flo
             second = min(second, di);
         }
     }
+    if (one) second = d;  // the nearest everywhere in the cell: the others are at least as far
     return d;
 }
 
@@ -132,16 +180,40 @@ void main() {
     float tMin = trace.clip.x * dirLength;
     float tMax = (rasterDepth > 0.0 ? rasterDepth : trace.clip.y) * dirLength;
 
-    // Culling by the objects' bounds.
+    // Culling by the objects' bounds (or, without culling, every object from the near plane on).
     g_count = 0;
     g_overflow = false;
+    g_evaluations = 0u;
+    bool cull = (trace.accel.x & kCullFlag) != 0u;
     float tStart = tMax;
     uint stepLimit = trace.counts.z;
-    for (uint obj = 0u; obj < trace.counts.x; ++obj) {
+    g_tileAll = (trace.accel.x & kTileListsFlag) == 0u;
+    g_tileFirst = 0u;
+    g_tileCount = trace.counts.x;
+    if (cull && !g_tileAll) {
+        uvec2 range = sdfTileRanges[sdfTileIndex(pixel, trace.accel.y)];
+        g_tileAll = range.y == 0xffffffffu;  // the list stands for every object
+        if (!g_tileAll) {
+            g_tileFirst = range.x;
+            g_tileCount = range.y;
+        }
+    }
+    // The ray's interval is the same with and without culling: the march starts at the first box
+    // entry and runs only when a box is crossed (one pass over the objects per ray, outside the
+    // step loop). Marching from the near plane instead would spend the step limit on empty space
+    // and change the picture (grazing floors at the horizon ran out of steps), so the baseline
+    // differs from culling only in the work per step.
+    bool crossed = false;
+    uint candidates = cull ? g_tileCount : trace.counts.x;
+    for (uint i = 0u; i < candidates; ++i) {
+        uint obj = cull ? tileObject(i) : i;
+        if (obj >= trace.counts.x) continue;  // not traced (occluder-only): never in a primary list
         vec2 iv = sdfRayInterval(obj, ro, rd);
         if (iv.x > iv.y || iv.y < tMin || iv.x > tMax) continue;
         tStart = min(tStart, max(iv.x, tMin));
         stepLimit = max(stepLimit, sdfObjects[obj].params.x);
+        crossed = true;
+        if (!cull) continue;  // no per-pixel list: every object at every step
         if (g_count < kListSize) {
             g_list[g_count] = obj;
             g_interval[g_count] = iv;
@@ -153,19 +225,44 @@ void main() {
 
     float safety = trace.epsilons.w;
     float footprint = trace.clip.z;
-    uint steps = 0u;
+    uint steps = 0u, cacheSteps = 0u;
     bool hit = false;
     uint hitObject = 0xffffffffu;
     float t = tStart;
-    if (g_count > 0 || g_overflow) {
+    if (crossed) {
         float omega = trace.epsilons.z;
         float prevRadius = 0.0, stepLength = 0.0, prevT = t;
         float bestError = 3.0e38, bestT = t;
         uint bestObject = 0xffffffffu;
-        for (; steps < stepLimit && t <= tMax; ++steps) {
-            uint nearest;
-            float second;
-            float d = sceneDistance(ro + rd * t, min(prevT, t), safety, nearest, second);
+        // World cache steps do not count against the step limit (the object steps then end where
+        // the unaccelerated trace's do); they have their own limit, so the loop stays bounded.
+        uint counted = 1u;
+        bool useCache = (trace.accel.x & kCacheBoundFlag) != 0u;
+        for (; steps < stepLimit && t <= tMax; steps += counted) {
+            counted = 1u;
+            vec3 p = ro + rd * t;
+            vec3 pa = abs(p);
+            // At least a few float ulps of the point's coordinates (scenes far from the origin)
+            // and of the distance travelled.
+            float eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
+            // The world cache: far from every surface a plain step of its distance with no
+            // object evaluated; near one, with the id field, only the object it names.
+            float cached = 0.0, cacheVoxel;
+            uint only = 0xffffffffu, cacheObject;
+            bool cacheStep = false;
+            if (useCache && sdfCacheLookup(p, cached, cacheVoxel, cacheObject)) {
+                // Beyond two voxels the cached lower bound (the exact distance less at most about
+                // one voxel of margin and cell extent) is at least about half the exact step;
+                // beyond two hit epsilons the point is no hit candidate, so every candidate and
+                // near miss is decided on the objects' distances, as without the cache.
+                cacheStep = (trace.accel.x & kCacheFlag) != 0u && cached > 2.0 * max(cacheVoxel, eps) &&
+                            cacheSteps < stepLimit;
+                if (!cacheStep && (trace.accel.x & kIdFlag) != 0u && cacheObject < trace.counts.x)
+                    only = cacheObject;  // NONE, UNCERTAIN and occluder-only objects: the list
+            }
+            uint nearest = 0xffffffffu;
+            float second = cached;
+            float d = cacheStep ? cached : sceneDistance(p, min(prevT, t), safety, only, nearest, second);
             float radius = abs(d);
             bool sorFail = omega > 1.0 && radius + prevRadius < stepLength;
             if (sorFail) {
@@ -177,15 +274,25 @@ void main() {
                 prevT = t;
                 continue;
             }
-            // At least a few float ulps of the point's coordinates (scenes far from the origin)
-            // and of the distance travelled.
-            vec3 pa = abs(ro + rd * t);
-            float eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
+            if (cacheStep) {
+                // A plain safe step (the cached value bounds every object's distance from below;
+                // as the previous radius it keeps the next over-relaxation check conservative).
+                counted = 0u;
+                ++cacheSteps;
+                prevRadius = d;
+                prevT = t;
+                stepLength = d;
+                t += d;
+                continue;
+            }
             if (d < eps) {
                 // Within eps of a surface by the safe distance. A field's safe distance lies up to
                 // its interpolation bound below the interpolated one, so the raw value decides.
                 float raw = d;
-                if (safety > 0.0 && sdfObjectVoxel(nearest) > 0.0) raw = sdfObjectDistance(nearest, ro + rd * t, 0.0);
+                if (safety > 0.0 && sdfObjectVoxel(nearest) > 0.0) {
+                    raw = sdfObjectDistance(nearest, ro + rd * t, 0.0);
+                    ++g_evaluations;
+                }
                 ++steps;
                 if (raw <= 0.0) {
                     // Inside the solid (a ray that starts inside, e.g. a camera in an object or
@@ -213,6 +320,7 @@ void main() {
                         tr += clamp(step, -limit, limit);
                         dr = sdfObjectDistance(nearest, ro + rd * tr, 0.0);
                         ++steps;
+                        ++g_evaluations;
                     }
                     // (With no refinement, or when the step limit cut it short, the candidate stands.)
                     if (trace.counts.w == 0u || steps >= stepLimit || abs(dr) <= 0.1 * eps) {
@@ -260,6 +368,8 @@ void main() {
     }
 
     vec3 p = ro + rd * t;
+    if (hit) g_evaluations += 4u;  // the normal's tetrahedron
+    float work = float((trace.accel.x & kCountEvalsFlag) != 0u ? g_evaluations : steps);
     if (hit) {
         // Fields: at least half a voxel, so the gradient spans the trilinear cells around the
         // point instead of one cell's piecewise-linear facet.
@@ -280,7 +390,7 @@ void main() {
         imageStore(gbufferAlbedoImage, pixel, packAlbedo(materials[info.z].baseColor.rgb));
 #endif
 #ifdef AUX
-        imageStore(gbufferAuxImage, pixel, vec4(float(info.w), float(steps), 0.0, 0.0));
+        imageStore(gbufferAuxImage, pixel, vec4(float(info.w), work, 0.0, 0.0));
 #endif
     } else if (!raster) {
         // Nothing else wrote this pixel this frame: the G-buffer's "nothing hit" values.
@@ -292,14 +402,14 @@ void main() {
         imageStore(gbufferAlbedoImage, pixel, vec4(0.0));
 #endif
 #ifdef AUX
-        imageStore(gbufferAuxImage, pixel, vec4(-1.0, float(steps), 0.0, 0.0));
+        imageStore(gbufferAuxImage, pixel, vec4(-1.0, work, 0.0, 0.0));
 #endif
     }
 #ifdef AUX
     else {
         // A mesh pixel or the background behind a mesh pass: keep the id the mesh pass wrote, add
         // the steps this ray took.
-        imageStore(gbufferAuxImage, pixel, vec4(imageLoad(gbufferAuxImage, pixel).x, float(steps), 0.0, 0.0));
+        imageStore(gbufferAuxImage, pixel, vec4(imageLoad(gbufferAuxImage, pixel).x, work, 0.0, 0.0));
     }
 #endif
 }
