@@ -10,6 +10,7 @@
 #include <glm/mat3x3.hpp>
 
 #include <shaders/sdf_tile_cull.h>
+#include <shaders/sdf_tile_cull_bounds.h>
 
 #include "renderer/core/shader_params.h"
 
@@ -17,10 +18,15 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_tile_cull;
-static_assert(sizeof(GpuSdfObject) == sizeof(program::SdfObject));
-static_assert(offsetof(GpuSdfObject, model) == offsetof(program::SdfObject, model));
-static_assert(offsetof(GpuSdfObject, boundsMin) == offsetof(program::SdfObject, boundsMin));
-static_assert(offsetof(GpuSdfObject, boundsMax) == offsetof(program::SdfObject, boundsMax));
+namespace bounds = shaders::sdf_tile_cull_bounds;
+static_assert(sizeof(GpuSdfObject) == sizeof(bounds::SdfObject));
+static_assert(offsetof(GpuSdfObject, model) == offsetof(bounds::SdfObject, model));
+static_assert(offsetof(GpuSdfObject, boundsMin) == offsetof(bounds::SdfObject, boundsMin));
+static_assert(offsetof(GpuSdfObject, boundsMax) == offsetof(bounds::SdfObject, boundsMax));
+// The per-object record the two passes share (one struct in both shaders).
+static_assert(sizeof(bounds::TileCullObject) == sizeof(program::TileCullObject));
+static_assert(offsetof(bounds::TileCullObject, rect) == offsetof(program::TileCullObject, rect));
+static_assert(offsetof(bounds::TileCullObject, axis2) == offsetof(program::TileCullObject, axis2));
 
 bool unbounded(const GpuSdfObject& o) {
     for (int a = 0; a < 3; ++a)
@@ -73,6 +79,45 @@ uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_
     return range(pmin.x, pmax.x, tilesX) * range(pmin.y, pmax.y, tilesY);
 }
 
+fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size) {
+    rhi::BufferDesc d;
+    d.size = size;
+    d.debugName = name;
+    return b.createBuffer(name, d);
+}
+
+// "sdf_tile_cull_bounds": per object its camera-relative box, bounding sphere and tile rectangle
+// (sdf_tile_cull_bounds.comp), computed once instead of once per tile.
+fg::BufferRef addTileBounds(FrameContext& fc, const SdfTileCullDesc& desc, uint32_t count, uint32_t tilesX,
+                            uint32_t tilesY) {
+    struct Data {
+        fg::BufferRef view, objects, out;
+    };
+    const rhi::ShaderDesc& cs = bounds::compute();
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const bounds::PushConstants push{glm::uvec4(count, tilesX, tilesY, 0),
+                                     glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f)};
+    const uint64_t size = uint64_t(std::max(count, 1u)) * sizeof(bounds::TileCullObject);
+    const Data& data = fc.graph.addPass<Data>(
+        "sdf_tile_cull_bounds", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.view = b.read(fc.board.find<SceneBuffers>()->view, rhi::Access::UniformRead);
+            d.objects = b.read(fc.board.find<SdfSceneBuffers>()->objects, rhi::Access::ShaderRead);
+            d.out = b.write(storageBuffer(b, "sdf.tile_cull_objects", size), rhi::Access::ShaderWrite);
+        },
+        [&cache = fc.cache, &cs, pipeline, push, count](const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.view))
+                .set("SdfObjects", ctx.buffer(d.objects))
+                .set("TileCullObjects", ctx.buffer(d.out));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            ctx.cmd.dispatch((count + 63) / 64);
+        });
+    return data.out;
+}
+
 }  // namespace
 
 uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height) {
@@ -83,7 +128,7 @@ uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32
 
 const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc) {
     const SdfSceneBuffers& sdf = *fc.board.find<SdfSceneBuffers>();
-    const fg::BufferRef view = fc.board.find<SceneBuffers>()->view;
+    const fg::BufferRef view = fc.board.find<SceneBuffers>()->view;  // the tile planes
     SdfTileLists lists;
     lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
     lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
@@ -93,19 +138,14 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     const uint64_t indexBytes = capacity * 4;
     lists.bytes = rangeBytes + indexBytes;
 
-    auto buffer = [](fg::PassBuilder& b, const char* name, uint64_t size) {
-        rhi::BufferDesc d;
-        d.size = size;
-        d.debugName = name;
-        return b.createBuffer(name, d);
-    };
+    const fg::BufferRef objects = addTileBounds(fc, desc, count, lists.tilesX, lists.tilesY);
     struct Clear {
         fg::BufferRef counter;
     };
     const Clear& clear = fc.graph.addPass<Clear>(
         "sdf_tile_cull_clear", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, Clear& d) {
-            d.counter = b.write(buffer(b, "sdf.tile_counter", 16), rhi::Access::CopyDst);
+            d.counter = b.write(storageBuffer(b, "sdf.tile_counter", 16), rhi::Access::CopyDst);
         },
         [](const Clear& d, fg::PassContext& ctx) { ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, 16, 0u); });
 
@@ -122,16 +162,16 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
         "sdf_tile_cull", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Data& d) {
             d.view = b.read(view, rhi::Access::UniformRead);
-            d.objects = b.read(sdf.objects, rhi::Access::ShaderRead);
+            d.objects = b.read(objects, rhi::Access::ShaderRead);
             d.counter = b.write(clear.counter, rw);
-            d.ranges = b.write(buffer(b, "sdf.tile_ranges", rangeBytes), rhi::Access::ShaderWrite);
-            d.indices = b.write(buffer(b, "sdf.tile_indices", indexBytes), rhi::Access::ShaderWrite);
+            d.ranges = b.write(storageBuffer(b, "sdf.tile_ranges", rangeBytes), rhi::Access::ShaderWrite);
+            d.indices = b.write(storageBuffer(b, "sdf.tile_indices", indexBytes), rhi::Access::ShaderWrite);
         },
         [&cache = fc.cache, &cs, pipeline, push, groupsX, groupsY](const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.view))
-                .set("SdfObjects", ctx.buffer(d.objects))
+                .set("TileCullObjects", ctx.buffer(d.objects))
                 .set("SdfTileCounter", ctx.buffer(d.counter))
                 .set("SdfTileRangesOut", ctx.buffer(d.ranges))
                 .set("SdfTileIndicesOut", ctx.buffer(d.indices));

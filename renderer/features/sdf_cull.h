@@ -59,12 +59,13 @@ struct SdfTileCullDesc {
 // buffer holds this many entries (at least one).
 uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height);
 
-// Adds "sdf_tile_cull_clear" (transfer: zeroes the slot counter) and "sdf_tile_cull" (compute:
-// one 64-invocation group per tile) and publishes SdfCullLists::primary (other members kept). Reads
-// SceneBuffers::view and SdfSceneBuffers::objects; desc.objects must describe the uploaded objects.
-// The lists are marked as frame outputs (kept to the end of the frame, never aliased after their
-// last use) so that SceneRenderer::readBuffer can read them back and the pass runs even while no
-// consumer reads them.
+// Adds "sdf_tile_cull_bounds" (compute: per object its world box, bounding sphere and a
+// conservative tile rectangle, 80 bytes each), "sdf_tile_cull_clear" (transfer: zeroes the slot
+// counter) and "sdf_tile_cull" (compute: one 64-invocation group per tile) and publishes
+// SdfCullLists::primary (other members kept). Reads SceneBuffers::view and SdfSceneBuffers::objects;
+// desc.objects must describe the uploaded objects. The lists are marked as frame outputs (kept to the end of
+// the frame, never aliased after their last use) so that SceneRenderer::readBuffer can read them back and the
+// pass runs even while no consumer reads them.
 const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc);
 
 // What a consumer pass declares and binds (buffers "SdfTileRanges", "SdfTileIndices" of

@@ -4,11 +4,13 @@
 //     (the ray construction of sdf_trace.comp: forward + ndc.x rayRight + ndc.y rayUp), bounded by
 //     the near and far planes (linear depth). The corners enclose every pixel-centre ray of the tile
 //     with half a pixel to spare;
-//  2. per object in [0, count): unbounded objects (bounds +-1e30) are always listed; otherwise the
-//     world bounding sphere of its local box under `model`, then the box itself (an OBB: centre and
-//     three half axes) against the six planes with the projected-radius test. A box is dropped only
-//     when it lies wholly outside one plane (with a small relative margin): conservative, an object
-//     whose box any pixel ray of the tile crosses between near and far is never dropped;
+//  2. per object in [0, count), from the pass sdf_tile_cull_bounds (sdf_tile_cull_bounds.comp: the
+//     world box of each object, its bounding sphere and a conservative tile rectangle): a tile
+//     outside the rectangle drops it; unbounded objects (bounds +-1e30) are always listed;
+//     otherwise the bounding sphere, then the box itself (an OBB: centre and three half axes)
+//     against the six planes with the projected-radius test. A box is dropped only when it lies
+//     wholly outside one plane (with a small relative margin): conservative, an object whose box
+//     any pixel ray of the tile crosses between near and far is never dropped;
 //  3. count + prefix sum, no fixed cap: the group counts its objects (shared atomic), one invocation
 //     reserves that many slots with an atomicAdd on the frame's counter (the prefix sum across
 //     tiles), then each chunk of 64 objects is written in ascending object order at the reserved
@@ -22,19 +24,16 @@ layout(local_size_x = 64) in;
 
 #include "view.glsl"
 
-// The layout of SdfObject in sdf_scene.glsl (sdf_cull.cpp checks it against GpuSdfObject); this
-// pass reads only the matrices and the bounds, so it does not include the distance code.
-struct SdfObject {
-    mat4 worldToLocal;
-    mat4 model;
-    mat4 prevModel;
-    vec4 boundsMin;  // xyz local bounds (+-1e30 when unbounded), w sigma_min
-    vec4 boundsMax;
-    uvec4 info;
-    uvec4 params;
+// Written by sdf_tile_cull_bounds.comp (the same struct; sdf_cull.cpp checks both layouts).
+struct TileCullObject {
+    vec4 centre;  // xyz box centre relative to the camera, w bounding radius (< 0: unbounded)
+    vec4 axis0;   // xyz half axes of the box in world units
+    vec4 axis1;
+    vec4 axis2;
+    uvec4 rect;  // tiles x0, y0, x1, y1 (inclusive; x0 > x1: no tile)
 };
 
-layout(set = 2, binding = 0, std430) readonly buffer SdfObjects { SdfObject sdfObjects[]; };
+layout(set = 2, binding = 0, std430) readonly buffer TileCullObjects { TileCullObject cullObjects[]; };
 layout(set = 2, binding = 1, std430) writeonly buffer SdfTileRangesOut { uvec2 rangesOut[]; };
 layout(set = 2, binding = 2, std430) writeonly buffer SdfTileIndicesOut { uint indicesOut[]; };
 layout(set = 2, binding = 3, std430) buffer SdfTileCounter { uint reserved; };
@@ -69,18 +68,15 @@ void tilePlanes(uvec2 tile) {
     g_planes[5] = vec4(-fwd, cull.clip.y);  // linear depth <= far
 }
 
-// Whether the object's box may meet the tile frustum.
-bool objectInTile(uint obj) {
-    vec3 bmin = sdfObjects[obj].boundsMin.xyz, bmax = sdfObjects[obj].boundsMax.xyz;
-    if (any(greaterThanEqual(abs(bmin), vec3(0.5e30))) || any(greaterThanEqual(abs(bmax), vec3(0.5e30))))
-        return true;  // unbounded (a plane): always listed
-    mat4 m = sdfObjects[obj].model;
-    vec3 h = 0.5 * (bmax - bmin);
-    vec3 c = (m * vec4(0.5 * (bmin + bmax), 1.0)).xyz - view.position.xyz;  // centre from the camera
-    vec3 a0 = m[0].xyz * h.x, a1 = m[1].xyz * h.y, a2 = m[2].xyz * h.z;
-    // The box's bounding sphere: its farthest corner from the centre.
-    float radius = sqrt(max(max(dot(a0 + a1 + a2, a0 + a1 + a2), dot(a0 + a1 - a2, a0 + a1 - a2)),
-                            max(dot(a0 - a1 + a2, a0 - a1 + a2), dot(a0 - a1 - a2, a0 - a1 - a2))));
+// Whether the object's box may meet the frustum of `tile`.
+bool objectInTile(uint obj, uvec2 tile) {
+    uvec4 rect = cullObjects[obj].rect;
+    if (any(lessThan(tile, rect.xy)) || any(greaterThan(tile, rect.zw))) return false;
+    vec4 centre = cullObjects[obj].centre;
+    if (centre.w < 0.0) return true;  // unbounded (a plane): always listed
+    vec3 c = centre.xyz;  // from the camera
+    float radius = centre.w;
+    vec3 a0 = cullObjects[obj].axis0.xyz, a1 = cullObjects[obj].axis1.xyz, a2 = cullObjects[obj].axis2.xyz;
     // Margin for rounding: relative to the sizes that enter the plane distance.
     float margin = 1e-4 * (radius + length(c)) + 1e-6 * length(view.position.xyz) + 1e-6;
     for (int i = 0; i < 6; ++i)
@@ -111,7 +107,7 @@ void main() {
     uint mine = 0u, bits = 0u;
     for (uint chunk = 0u; chunk * 64u < count; ++chunk) {
         uint obj = chunk * 64u + lid;
-        if (obj < count && objectInTile(obj)) {
+        if (obj < count && objectInTile(obj, tile)) {
             ++mine;
             if (chunk < 32u) bits |= 1u << chunk;
         }
@@ -134,7 +130,7 @@ void main() {
     uint base = s_base, total = s_count, written = 0u;
     for (uint chunk = 0u; chunk * 64u < count && written < total; ++chunk) {
         uint obj = chunk * 64u + lid;
-        bool accept = obj < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj));
+        bool accept = obj < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj, tile));
         if (lid < 2u) s_mask[lid] = 0u;
         barrier();
         if (accept) atomicOr(s_mask[lid >> 5u], 1u << (lid & 31u));
