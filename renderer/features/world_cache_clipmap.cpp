@@ -10,15 +10,10 @@ constexpr float kUnboundedThreshold = 0.5e30f;  // renderer kSdfUnbounded / 2
 constexpr uint64_t kMaxGridCellsPerObject = 512;
 constexpr uint64_t kMaxGridCellsPerQuery = 4096;
 
-// (level, brick) -> one 64-bit key: 4 bits of level, 20 bits per brick coordinate.
-uint64_t brickKey(uint32_t level, glm::ivec3 b) {
-    auto c = [](int v) { return uint64_t(uint32_t(v + (1 << 19)) & 0xfffffu); };
-    return (uint64_t(level) << 60) | (c(b.x) << 40) | (c(b.y) << 20) | c(b.z);
-}
-void unpackBrick(uint64_t key, uint32_t& level, glm::ivec3& b) {
-    auto c = [](uint64_t v) { return int(v & 0xfffffu) - (1 << 19); };
-    level = uint32_t(key >> 60);
-    b = {c(key >> 40), c(key >> 20), c(key)};
+CacheBrickKey brickKey(uint32_t level, glm::ivec3 b) { return {int32_t(level), b.x, b.y, b.z}; }
+void unpackBrick(const CacheBrickKey& key, uint32_t& level, glm::ivec3& b) {
+    level = uint32_t(key[0]);
+    b = {key[1], key[2], key[3]};
 }
 uint64_t cellKey(glm::ivec3 c) {
     auto p = [](int v) { return uint64_t(uint32_t(v + (1 << 20)) & 0x1fffffu); };
@@ -126,7 +121,7 @@ void WorldCacheClipmap::update(const ClipmapSettings& settings, glm::vec3 camera
         planScroll(oldOrigin);
         drainQueue(std::max(settings.budgetVoxels, 1u));
     }
-    for (uint64_t key : m_queue) {
+    for (const CacheBrickKey& key : m_queue) {
         uint32_t level;
         glm::ivec3 b;
         unpackBrick(key, level, b);
@@ -297,7 +292,7 @@ void WorldCacheClipmap::planScroll(const std::vector<glm::ivec3>& oldOrigin) {
 // Compares every object with its state at its last cache update; changed ones queue and splat the
 // bricks of their old and new regions. Records the new states.
 void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
-    std::unordered_map<uint64_t, std::vector<uint32_t>> splats;
+    std::map<CacheBrickKey, std::vector<uint32_t>> splats;  // ordered: deterministic job order
     std::unordered_map<uint32_t, Tracked> now;
     now.reserve(objects.size());
     const float threshold = 0.5f * slack();
@@ -330,12 +325,7 @@ void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
             markRegion(t.lo, t.hi, t.unbounded, kCacheNone, splats);
         }
     m_tracked = std::move(now);
-    std::vector<uint64_t> keys;
-    keys.reserve(splats.size());
-    for (const auto& kv : splats) keys.push_back(kv.first);
-    std::sort(keys.begin(), keys.end());  // deterministic job order
-    for (uint64_t key : keys) {
-        std::vector<uint32_t>& objs = splats[key];
+    for (auto& [key, objs] : splats) {
         std::sort(objs.begin(), objs.end());
         objs.erase(std::unique(objs.begin(), objs.end()), objs.end());
         uint32_t level;
@@ -351,7 +341,7 @@ void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
 // Queues the bricks of every level within T + s of the world box [lo, hi] (every brick of the
 // windows when `everywhere`), and lists `splatObject` (kCacheNone: none) for their splat.
 void WorldCacheClipmap::markRegion(glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
-                                   std::unordered_map<uint64_t, std::vector<uint32_t>>& splats) {
+                                   std::map<CacheBrickKey, std::vector<uint32_t>>& splats) {
     const int b = int(kCacheBrick);
     for (uint32_t l = 0; l < m_levelCount; ++l) {
         const float h = voxel(l), grow = kCacheTruncationVoxels * h + slack();
@@ -366,7 +356,7 @@ void WorldCacheClipmap::markRegion(glm::vec3 lo, glm::vec3 hi, bool everywhere, 
         for (int z = b0.z; z <= b1.z; ++z)
             for (int y = b0.y; y <= b1.y; ++y)
                 for (int x = b0.x; x <= b1.x; ++x) {
-                    const uint64_t key = brickKey(l, {x, y, z});
+                    const CacheBrickKey key = brickKey(l, {x, y, z});
                     if (m_queued.insert(key).second) m_queue.push_back(key);
                     std::vector<uint32_t>& s = splats[key];
                     if (splatObject != kCacheNone) s.push_back(splatObject);
@@ -380,7 +370,7 @@ void WorldCacheClipmap::drainQueue(uint32_t budget) {
     uint64_t done = 0;
     std::vector<uint32_t> objs;
     while (!m_queue.empty()) {
-        const uint64_t key = m_queue.front();
+        const CacheBrickKey key = m_queue.front();
         uint32_t level;
         glm::ivec3 b;
         unpackBrick(key, level, b);

@@ -41,8 +41,9 @@
 #include <array>
 #include <cstdint>
 #include <deque>
+#include <map>
+#include <set>
 #include <unordered_map>
-#include <unordered_set>
 #include <vector>
 
 #include <glm/mat4x4.hpp>
@@ -119,6 +120,8 @@ struct WorldCacheReadback {
     std::vector<uint32_t> objectKeys;  // per object index of the frame: its key (entity index)
 };
 
+using CacheBrickKey = std::array<int32_t, 4>;  // level, brick x, y, z (world voxel / 8)
+
 struct CacheBox {
     glm::ivec3 min{0}, max{0};  // voxels [min, max)
     uint64_t voxels() const;
@@ -170,7 +173,7 @@ private:
     void planScroll(const std::vector<glm::ivec3>& oldOrigin);
     void planChanges(const std::vector<ClipmapObject>& objects);
     void markRegion(glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
-                    std::unordered_map<uint64_t, std::vector<uint32_t>>& splats);
+                    std::map<CacheBrickKey, std::vector<uint32_t>>& splats);
     void drainQueue(uint32_t budget);
     void addBoxJobs(uint32_t level, const CacheBox& box, CacheJobMode mode, uint64_t& counter);
     void addJob(uint32_t level, const CacheBox& box, CacheJobMode mode, const std::vector<uint32_t>& objects);
@@ -198,8 +201,8 @@ private:
     ClipmapFrameStats m_stats;
     // across frames
     std::unordered_map<uint32_t, Tracked> m_tracked;
-    std::deque<uint64_t> m_queue;  // (level, brick) keys, FIFO
-    std::unordered_set<uint64_t> m_queued;
+    std::deque<CacheBrickKey> m_queue;  // FIFO
+    std::set<CacheBrickKey> m_queued;
 };
 
 }  // namespace penumbra::render

@@ -51,7 +51,9 @@ uint64_t expectedBrickVoxels(const WorldCacheClipmap& c,
         const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack();
         const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
         for (const auto& [lo, hi] : boxes) {
-            glm::ivec3 a(glm::floor((lo - g) / h)), b(glm::floor((hi + g) / h));
+            // As the clipmap rounds: the grown box in float, divided by h in double.
+            glm::ivec3 a(glm::floor(glm::dvec3(lo - g) / double(h))),
+                b(glm::floor(glm::dvec3(hi + g) / double(h)));
             a = glm::max(a, wo);
             b = glm::min(b, w1 - 1);
             for (int z = floorDiv(a.z, 8); z <= floorDiv(b.z, 8); ++z)
@@ -137,6 +139,23 @@ TEST(WorldCacheClipmap, ChangedObjectsQueueOnlyTheirOldAndNewRegions) {
     objects.erase(objects.begin());  // key 1 removed; keys 2, 3 shift to indices 0, 1
     c.update(settings(1u << 20, 64), cam, objects);
     EXPECT_EQ(c.stats().changedObjects, 3u);
+}
+
+// Brick coordinates past 2^19 (1e5 units from the origin at 0.01-unit voxels): bricks are keyed
+// by full 32-bit coordinates, so none is lost or merged.
+TEST(WorldCacheClipmap, DirtyBricksFarFromTheOrigin) {
+    WorldCacheClipmap c;
+    const glm::vec3 base(1.0e5f, 0.0f, 0.0f);
+    std::vector<ClipmapObject> objects{box(1, base, 0.05f)};
+    const ClipmapSettings s{1, 64, 0.01f, 1u << 20};
+    c.update(s, base, objects);
+    const glm::vec3 moved = base + glm::vec3(0.1f, 0.0f, 0.0f);
+    objects[0] = box(1, moved, 0.05f);
+    c.update(s, base, objects);
+    const uint64_t expected =
+        expectedBrickVoxels(c, {{base - 0.05f, base + 0.05f}, {moved - 0.05f, moved + 0.05f}});
+    EXPECT_EQ(c.stats().dirtyVoxels, expected);  // exactly the bricks of old + new bounds (+ T + s)
+    EXPECT_GT(expected, 0u);
 }
 
 TEST(WorldCacheClipmap, SubSlackMovesMarkNothing) {
