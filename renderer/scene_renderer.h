@@ -4,6 +4,8 @@
 //                              and material textures are uploaded once per asset and kept
 //   gbuffer_mesh   (raster)    MeshRenderer entities into the deferred G-buffer
 //   sdf_upload     (transfer)  the frame's SDF objects and shape-program records
+//   sdf_world_cache (compute)  clipmapped world distance + object-id field, scrolled and updated
+//                              incrementally (renderer/features/sdf_world_cache.h; acceleration)
 //   sdf_trace      (compute)   sphere tracing of the SdfRenderer entities into the same G-buffer,
 //                              bounded by the mesh depth (hybrid)
 //   sdf_surface    (compute)   textured SDF materials: triplanar albedo and normal maps in object

@@ -6,6 +6,7 @@
 //   mesh_gbuffer    SceneBuffers, GBuffer, draws   (writes the GBuffer targets)
 //   sdf_scene       SdfSceneData (CPU)             SdfSceneBuffers
 //   sdf_cull        SceneBuffers, SdfSceneBuffers  SdfCullLists::primary (per-tile object lists)
+//   sdf_world_cache SdfSceneBuffers, objects (CPU) SdfWorldCacheView (persistent textures)
 //   sdf_trace       SceneBuffers, SdfSceneBuffers, (reads the mesh pass's depth, writes the GBuffer)
 //                   GBuffer
 //   sdf_surface     SceneBuffers, SdfSceneBuffers, (writes GBuffer albedo / normal of textured
