@@ -599,7 +599,7 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!string(value, p, name)) return false;
             if (!parseDebugView(name, s.debugView)) {
                 return fail(p, fmt::format("unknown debug view '{}' (expected none, normals, depth, albedo, "
-                                           "steps, ids, field-slice, ao, shadow, bentnormal or thickness)",
+                                           "steps, ids, field-slice, ao, shadow, bentnormal, thickness or tiles)",
                                            name));
             }
         } else if (key == "shadows") {

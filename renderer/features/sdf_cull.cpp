@@ -133,7 +133,7 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
     lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
     const uint32_t count = std::min<uint32_t>(uint32_t(desc.objects.size()), sdf.tracedCount);
-    const uint64_t capacity = std::min<uint64_t>(sdfTileListCapacity(desc, fc.width, fc.height), 0xfffffff0u);
+    const uint64_t capacity = std::min(sdfTileListCapacity(desc, fc.width, fc.height), kSdfTileMaxIndices);
     const uint64_t rangeBytes = uint64_t(lists.tilesX) * lists.tilesY * 8;
     const uint64_t indexBytes = capacity * 4;
     lists.bytes = rangeBytes + indexBytes;

@@ -20,8 +20,13 @@ namespace penumbra::render {
 
 inline constexpr uint32_t kSdfTileSize = 8;  // pixels per tile side
 // A range's count meaning "every object of the consumer's range": written only when a tile's
-// reservation would pass the indices' capacity, which sdfTileListCapacity makes unreachable.
+// reservation would pass the indices' capacity. sdfTileListCapacity bounds the total of all lists,
+// so it is unreachable unless that bound exceeds kSdfTileMaxIndices (e.g. thousands of unbounded
+// objects or objects around the camera on a 4K frame): then the indices are capped there and the
+// tiles that reserve last loop over every object (correct, slower) instead of the frame failing
+// to allocate.
 inline constexpr uint32_t kSdfTileAllObjects = 0xffffffffu;
+inline constexpr uint64_t kSdfTileMaxIndices = uint64_t(1) << 26;  // 256 MiB of indices
 
 // One set of tile lists. ranges: uvec2 per tile and layer (x first index into `indices`, y count);
 // tile index = (y / 8) * tilesX + x / 8; layer L (one per shadowed light for shadows) starts at

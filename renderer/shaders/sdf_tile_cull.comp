@@ -16,8 +16,9 @@
 //     tiles), then each chunk of 64 objects is written in ascending object order at the reserved
 //     base plus the chunk's running total and an exclusive prefix of the accepted flags (popcount
 //     of a shared 64-bit mask). The CPU sizes the indices from the scene (sdfTileListCapacity, an
-//     upper bound of this total); a reservation past that capacity - unreachable by that bound -
-//     writes (0, 0xffffffff), "all objects", and the consumer loops over every object.
+//     upper bound of this total, capped at kSdfTileMaxIndices); a reservation past that capacity -
+//     unreachable below the cap - writes (0, 0xffffffff), "all objects", and the consumer loops
+//     over every object.
 // Per-invocation loops run count / 64 iterations (software drivers dislike very long loops).
 #version 450
 layout(local_size_x = 64) in;

@@ -377,5 +377,43 @@ TEST_P(SdfCull, TilesDebugViewMatchesGolden) {
 
 INSTANTIATE_TEST_SUITE_P(Backends, SdfCull, testing::ValuesIn(gpuBackends()), backendName);
 
+// ---- the CPU capacity bound -------------------------------------------------------------------------
+
+TEST(SdfTileListCapacity, CountsEachObjectsScreenRectangle) {
+    // Camera at the origin looking down -Z, 60 degrees, 160x96: 20 x 12 tiles.
+    const glm::mat4 view(1.0f);
+    glm::mat4 proj = glm::perspectiveRH_ZO(kFovY, float(kW) / float(kH), 0.1f, 100.0f);
+    proj[1][1] *= -1.0f;
+    auto object = [](glm::vec3 position, float half, bool unbounded = false) {
+        render::GpuSdfObject o{};
+        o.model = glm::translate(glm::mat4(1.0f), position);
+        o.worldToLocal = glm::inverse(o.model);
+        o.boundsMin = glm::vec4(glm::vec3(unbounded ? -render::kSdfUnbounded : -half), 1.0f);
+        o.boundsMax = glm::vec4(glm::vec3(unbounded ? render::kSdfUnbounded : half), 0.0f);
+        return o;
+    };
+    auto capacity = [&](const render::GpuSdfObject& o) {
+        const std::vector<render::GpuSdfObject> objects{o};
+        return render::sdfTileListCapacity({objects, view, proj, 0.1f, 100.0f}, kW, kH);
+    };
+    const uint64_t all = 20 * 12;
+    const uint64_t centre = capacity(object({0, 0, -10}, 0.05f));  // a few pixels wide
+    const uint64_t big = capacity(object({0, 0, -10}, 2.0f));
+    std::printf("  tiles: unbounded %llu, small %llu, large %llu of %llu\n",
+                (unsigned long long)capacity(object({0, 0, 0}, 1, true)), (unsigned long long)centre,
+                (unsigned long long)big, (unsigned long long)all);
+    EXPECT_EQ(capacity(object({0, 0, 0}, 1, true)), all) << "unbounded: every tile";
+    EXPECT_EQ(capacity(object({0, 0, 0.5f}, 1.0f)), all) << "around the camera plane: every tile";
+    EXPECT_EQ(capacity(object({0, 0, 5}, 0.5f)), 1u)
+        << "wholly behind the camera: none (the minimum 1 entry)";
+    EXPECT_EQ(capacity(object({0, 0, -150}, 0.5f)), 1u) << "wholly behind the far plane: none";
+    EXPECT_EQ(capacity(object({100, 0, -10}, 0.5f)), 1u) << "far outside the view: none";
+    // A sphere inside one tile, grown by a tile each way: at most 3 x 3 (a tile corner: 4 x 4).
+    EXPECT_GE(centre, 1u);
+    EXPECT_LE(centre, 16u) << "a few-pixel object: its tile and the ring around it";
+    EXPECT_GT(big, centre);
+    EXPECT_LT(big, all) << "a 4-unit box at 10 units covers part of the frame";
+}
+
 }  // namespace
 }  // namespace penumbra::test
