@@ -37,6 +37,7 @@
 #include "renderer/core/blackboard.h"
 #include "renderer/core/gpu_cache.h"
 #include "renderer/features/frame_context.h"
+#include "renderer/features/sdf_atlas.h"
 #include "renderer/features/sdf_scene.h"
 #include "renderer/frame_graph/frame_graph.h"
 #include "renderer/scene_renderer.h"
@@ -225,6 +226,32 @@ TEST_P(SdfInstancing, StoreUploadsOnlyWhatChanged) {
     EXPECT_TRUE(st.recordsUploaded);
     EXPECT_EQ(st.objectsUploaded, 0u);
     EXPECT_EQ(st.uploadBytes, 2u * sizeof(sdf::ShapeInstruction));
+
+    // A field table (the atlas' slot table): sent when it first appears and when it changes.
+    rhi::TextureDesc atlasDesc;
+    atlasDesc.dimension = rhi::TextureDimension::Tex3D;
+    atlasDesc.format = rhi::Format::R16_FLOAT;
+    atlasDesc.width = atlasDesc.height = atlasDesc.depthOrLayers = 8;
+    atlasDesc.debugName = "test atlas";
+    const rhi::TextureHandle atlas = dev().createTexture(atlasDesc);
+    ASSERT_TRUE(atlas.isValid());
+    std::vector<float> fieldTable(2 * sizeof(render::GpuSdfField) / sizeof(float), 0.5f);
+    data.atlas = atlas;
+    data.fields = fieldTable.data();
+    data.fieldBytes = fieldTable.size() * sizeof(float);
+    st = step("field table appears");
+    EXPECT_TRUE(st.fieldsUploaded && !st.recordsUploaded);
+    EXPECT_EQ(st.uploadBytes, data.fieldBytes);  // threshold: exactly the table
+    st = step("field table unchanged");
+    EXPECT_FALSE(st.fieldsUploaded);
+    EXPECT_EQ(st.uploadBytes, 0u);
+    fieldTable[3] = 2.0f;
+    st = step("field table changed");
+    EXPECT_TRUE(st.fieldsUploaded);
+    data.atlas = {};
+    data.fields = nullptr;
+    data.fieldBytes = 0;
+    dev().destroy(atlas);
 
     data.objects.clear();
     data.tracedCount = 0;
