@@ -28,10 +28,24 @@ namespace fs = std::filesystem;
 constexpr double kFrameDt = 1.0 / 60.0;
 constexpr float kMoveStep = 0.1f;  // --moving: "object 0" jumps this far left / right every frame
 
-// The passes a configuration's trace, shadow and AO times are made of (bench_objects.h).
-const char* const kTracePasses[] = {"sdf_trace", "sdf_tile_cull", "sdf_world_cache", "sdf_object_scatter"};
-const char* const kShadowPasses[] = {"sdf_shadow", "sdf_tile_cull_effects"};
-const char* const kUpdatePasses[] = {"sdf_world_cache", "sdf_object_scatter"};
+// What each pass is charged to (bench_objects.h), by name: the acceleration modules' passes carry
+// their module's prefix, so passes added later are still counted where they belong.
+enum class Group { Trace, TraceCull, TraceCache, Scatter, TraceOther, Shadow, EffectsCull, Ao, Other, Count };
+
+bool startsWith(const std::string& s, const char* prefix) { return s.rfind(prefix, 0) == 0; }
+
+Group groupOf(const std::string& pass) {
+    if (pass == "sdf_trace") return Group::Trace;
+    if (startsWith(pass, "sdf_tile_cull_effects") || startsWith(pass, "sdf_effects_"))
+        return Group::EffectsCull;
+    if (startsWith(pass, "sdf_tile_cull")) return Group::TraceCull;
+    if (startsWith(pass, "sdf_world_cache")) return Group::TraceCache;
+    if (pass == "sdf_object_scatter") return Group::Scatter;
+    if (startsWith(pass, "sdf_trace_")) return Group::TraceOther;  // e.g. the cache stand-in
+    if (pass == "sdf_shadow") return Group::Shadow;
+    if (pass == "sdf_ao") return Group::Ao;
+    return Group::Other;
+}
 
 struct Config {
     std::string name;
@@ -78,18 +92,32 @@ struct Cell {
         auto it = passes.find(pass);
         return it == passes.end() ? 0.0 : median(it->second);  // a pass that did not run costs 0
     }
-    bool ran(const std::string& pass) const { return passes.count(pass) != 0; }
-    template <size_t K>
-    double sum(const char* const (&names)[K]) const {
-        double s = 0;
-        for (const char* n : names) s += med(n);
-        return s;
+    // Sum of the medians of the group's passes; NaN when none of them ran.
+    double group(Group g) const {
+        double sum = 0;
+        bool any = false;
+        for (const auto& [name, series] : passes)
+            if (groupOf(name) == g) {
+                sum += median(series);
+                any = true;
+            }
+        return any ? sum : std::nan("");
     }
-    double trace() const { return sum(kTracePasses); }
-    double shadow() const { return sum(kShadowPasses); }
-    double ao() const { return med("sdf_ao"); }
+    double groups(std::initializer_list<Group> gs) const {
+        double sum = 0;
+        for (Group g : gs)
+            if (const double v = group(g); std::isfinite(v)) sum += v;
+        return sum;
+    }
+    double trace() const {
+        return groups({Group::Trace, Group::TraceCull, Group::TraceCache, Group::Scatter, Group::TraceOther});
+    }
+    double shadow() const { return groups({Group::Shadow, Group::EffectsCull}); }
+    double ao() const { return groups({Group::Ao}); }
     double frame() const { return median(total); }
-    double updateShare() const { return frame() > 0 ? sum(kUpdatePasses) / frame() : std::nan(""); }
+    double updateShare() const {
+        return frame() > 0 ? groups({Group::TraceCache, Group::Scatter}) / frame() : std::nan("");
+    }
 };
 
 struct Table {  // one backend and instancing mode
@@ -243,8 +271,9 @@ CLI::App* addBenchObjectsCommand(CLI::App& group, BenchObjectsOptions& opt) {
     CLI::App* cmd = group.add_subcommand(
         "objects",
         "Object-count sweep (mTec Table 2): median GPU ms of the SDF trace (sdf_trace + the acceleration "
-        "passes sdf_tile_cull, sdf_world_cache, sdf_object_scatter), shadows (sdf_shadow + "
-        "sdf_tile_cull_effects) and AO (sdf_ao) on the generated objects scene, per object count and "
+        "passes sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter, sdf_trace_*), shadows (sdf_shadow + "
+        "sdf_tile_cull_effects*, sdf_effects_*) and AO (sdf_ao) on the generated objects scene, per object "
+        "count and "
         "acceleration configuration (none, culling, id, world, all), with speed-ups against none; or, "
         "with --write-scene, write that scene and exit");
     cmd->add_option("--counts", opt.counts, "Object counts, comma-separated (each 1 .. 100000)")
@@ -435,23 +464,27 @@ std::string summary(const Table& t, const std::vector<Config>& configs, F value,
     return md + "\n";
 }
 
-// Every pass that makes up the columns, per N and configuration: nothing hidden in a sum.
+// Every group that makes up the columns, per N and configuration: nothing hidden in a sum (the CSV
+// has every pass).
 std::string detail(const Table& t, const std::vector<Config>& configs) {
     std::string md =
-        "| N | config | SDF objects | sdf_trace | sdf_tile_cull | sdf_world_cache | sdf_object_scatter | "
-        "trace total | "
-        "trace / N | sdf_shadow | sdf_tile_cull_effects | sdf_ao | frame GPU | update share |\n"
-        "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
+        "| N | config | SDF objects | sdf_trace | culling (sdf_tile_cull*) | world cache (sdf_world_cache*) "
+        "| "
+        "sdf_object_scatter | other trace (sdf_trace_*) | trace total | trace / N | sdf_shadow | effects "
+        "culling (sdf_tile_cull_effects*, sdf_effects_*) | sdf_ao | frame GPU | update share |\n"
+        "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const auto& [n, row] : t.cells)
         for (const Config& c : configs) {
             const Cell& x = row.at(c.name);
-            auto col = [&](const char* pass) { return x.ran(pass) ? ms(x.med(pass)) : std::string("–"); };
+            auto col = [&](Group g) {
+                const double v = x.group(g);
+                return std::isfinite(v) ? ms(v) : std::string("–");
+            };
             md += fmt::format(
-                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.1f} % |\n", n, c.name,
-                x.sdfObjects, col("sdf_trace"), col("sdf_tile_cull"), col("sdf_world_cache"),
-                col("sdf_object_scatter"), ms(x.trace()), fmt::format("{:.4f}", x.trace() / n),
-                col("sdf_shadow"), col("sdf_tile_cull_effects"), col("sdf_ao"), ms(x.frame()),
-                100.0 * x.updateShare());
+                "| {} | {} | {} | {} | {} | {} | {} | {} | {} | {:.4f} | {} | {} | {} | {} | {:.1f} % |\n", n,
+                c.name, x.sdfObjects, col(Group::Trace), col(Group::TraceCull), col(Group::TraceCache),
+                col(Group::Scatter), col(Group::TraceOther), ms(x.trace()), x.trace() / n, col(Group::Shadow),
+                col(Group::EffectsCull), col(Group::Ao), ms(x.frame()), 100.0 * x.updateShare());
         }
     return md + "\n";
 }
@@ -481,8 +514,8 @@ std::string objectsMarkdown(const BenchObjectsOptions& opt, const std::vector<Ta
         opt.instancing, opt.resolution, opt.quality.empty() ? "" : " --quality " + opt.quality, header);
     for (const Table& t : tables) {
         md += fmt::format(
-            "#### {}\n\nTrace GPU ms (median; sdf_trace + sdf_tile_cull + sdf_world_cache + "
-            "sdf_object_scatter):\n\n",
+            "#### {}\n\nTrace GPU ms (medians; sdf_trace + sdf_tile_cull* + sdf_world_cache* + "
+            "sdf_object_scatter + sdf_trace_*):\n\n",
             tableTitle(t));
         md += summary(
             t, configs, [](const Cell& c) { return c.trace(); }, false);
@@ -490,7 +523,7 @@ std::string objectsMarkdown(const BenchObjectsOptions& opt, const std::vector<Ta
         md += summary(
             t, configs, [](const Cell& c) { return c.trace(); }, true);
         md += growth(t);
-        md += "Shadow GPU ms (sdf_shadow + sdf_tile_cull_effects):\n\n";
+        md += "Shadow GPU ms (sdf_shadow + sdf_tile_cull_effects* + sdf_effects_*):\n\n";
         md += summary(
             t, configs, [](const Cell& c) { return c.shadow(); }, false);
         md += "Shadow speed-up against none:\n\n";
@@ -503,8 +536,9 @@ std::string objectsMarkdown(const BenchObjectsOptions& opt, const std::vector<Ta
         md += summary(
             t, configs, [](const Cell& c) { return c.ao(); }, true);
         md +=
-            "Every pass (median GPU ms; – = the pass did not run; update share = (sdf_world_cache + "
-            "sdf_object_scatter) / frame GPU):\n\n";
+            "Every pass group (sum of its passes' median GPU ms; – = no pass of the group ran; update share "
+            "= "
+            "(sdf_world_cache* + sdf_object_scatter) / frame GPU):\n\n";
         md += detail(t, configs);
     }
     return md;
