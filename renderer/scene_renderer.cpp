@@ -934,7 +934,7 @@ void SceneRenderer::Impl::addWorldCache(FrameContext& fc, const FrameDesc& desc,
     std::string why;
     if (!(accel.worldCache || accel.idField) || sdfData.objects.empty())
         worldCache.release(graph);
-    else if (!worldCache.add(fc, sdfData.objects, cam.eye, accel, why))
+    else if (!worldCache.add(fc, sdfData, cam.eye, accel, why))
         log::warn("scene renderer: {} (the frame runs without the world cache)", why);
 }
 

@@ -13,12 +13,30 @@ namespace {
 
 namespace program = shaders::sdf_world_cache_update;
 constexpr uint32_t kMaxGroupsPerDispatch = 65535;
+constexpr uint32_t kExactProgram = 1u;  // CacheObjectFlags: the shape program's value is exact
 
 struct UpdateData {
     SdfSceneBuffers sdf;
     SdfWorldCacheView view;
-    fg::BufferRef jobs, list;
+    fg::BufferRef jobs, list, flags;
 };
+
+// An analytic program whose value is an upper bound of the true signed distance as well as a
+// lower one (shapes are exact, so are transforms; a union never overestimates |d| inside and is
+// exact outside, so its value is >= the true signed distance): only shapes, unions and transforms.
+bool exactProgram(const std::vector<sdf::ShapeInstruction>& records, uint32_t first) {
+    if (first >= records.size()) return false;
+    const uint32_t count = records[first].i[1];
+    if (count > records.size() - first - 1) return false;
+    for (uint32_t k = first + 1; k <= first + count; ++k) {
+        const uint32_t op = records[k].op;
+        const bool shape = op >= uint32_t(sdf::ShapeOp::Sphere) && op <= uint32_t(sdf::ShapeOp::Plane);
+        if (!shape && op != uint32_t(sdf::ShapeOp::Union) && op != uint32_t(sdf::ShapeOp::PushTransform) &&
+            op != uint32_t(sdf::ShapeOp::PopTransform))
+            return false;
+    }
+    return true;
+}
 
 rhi::SamplerHandle nearestSampler(GpuCache& cache) {
     rhi::SamplerDesc d;  // integer textures need nearest filtering to be complete on GL
@@ -43,6 +61,7 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
             readSdfScene(b, d.sdf);
             b.read(d.jobs, rhi::Access::ShaderRead);
             b.read(d.list, rhi::Access::ShaderRead);
+            b.read(d.flags, rhi::Access::ShaderRead);
             b.read(d.view.levels, rhi::Access::ShaderRead);
             const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
             b.write(d.view.distance, rw);
@@ -54,6 +73,7 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
             ShaderParams params(cs);
             setSdfScene(params, ctx, d.sdf, atlasSampler);
             params.set("CacheJobs", ctx.buffer(d.jobs))
+                .set("CacheObjectFlags", ctx.buffer(d.flags))
                 .set("CacheObjectList", ctx.buffer(d.list))
                 .set("CacheLevels", ctx.buffer(d.view.levels))
                 .setStorage("cacheDistanceImage", ctx.texture(d.view.distance))
@@ -127,9 +147,14 @@ bool SdfWorldCache::ensureTextures(fg::FrameGraph& graph, std::string& error) {
     return true;
 }
 
-bool SdfWorldCache::add(FrameContext& fc, const std::vector<GpuSdfObject>& objects, glm::vec3 camera,
+bool SdfWorldCache::add(FrameContext& fc, const SdfSceneData& scene, glm::vec3 camera,
                         const scene::AccelerationSettings& settings, std::string& error) {
+    const std::vector<GpuSdfObject>& objects = scene.objects;
     m_objects.resize(objects.size());
+    m_flags.assign(std::max<size_t>(objects.size(), 1), 0u);
+    for (size_t i = 0; i < objects.size(); ++i)
+        if (objects[i].info.x == uint32_t(SdfKind::Shapes) && exactProgram(scene.records, objects[i].info.y))
+            m_flags[i] = kExactProgram;
     for (size_t i = 0; i < objects.size(); ++i)
         m_objects[i] = {objects[i].info.w, objects[i].model, glm::vec3(objects[i].boundsMin),
                         glm::vec3(objects[i].boundsMax)};
@@ -169,14 +194,17 @@ bool SdfWorldCache::add(FrameContext& fc, const std::vector<GpuSdfObject>& objec
             d.jobs = uploadBuffer(b, "cache.jobs", std::max<uint64_t>(cm.jobs().size(), 1) * sizeof(CacheJob),
                                   bytes);
             d.list = uploadBuffer(b, "cache.list", std::max<uint64_t>(cm.objectList().size(), 1) * 4, bytes);
+            d.flags = uploadBuffer(b, "cache.flags", m_flags.size() * 4, bytes);
             view.levels = d.view.levels;
             view.bytes += m_levelsData.size();
             in.view = d.view;
             in.jobs = d.jobs;
             in.list = d.list;
+            in.flags = d.flags;
         },
         [this](const UpdateData& d, fg::PassContext& ctx) {
             updateChunked(ctx.cmd, ctx.buffer(d.view.levels), m_levelsData.data(), m_levelsData.size());
+            updateChunked(ctx.cmd, ctx.buffer(d.flags), m_flags.data(), m_flags.size() * 4);
             const auto& jobs = m_clipmap.jobs();
             const auto& list = m_clipmap.objectList();
             if (!jobs.empty())

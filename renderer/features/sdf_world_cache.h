@@ -51,9 +51,9 @@ public:
     SdfWorldCache& operator=(const SdfWorldCache&) = delete;
 
     // Plans and adds this frame's update passes; publishes SdfWorldCacheView. Call after
-    // addSdfSceneUpload (reads SdfSceneBuffers). `objects` must stay alive until the graph ran.
+    // addSdfSceneUpload (reads SdfSceneBuffers). `scene` must stay alive until the graph ran.
     // False with `error` when the textures cannot be created (the frame goes on without a cache).
-    bool add(FrameContext& fc, const std::vector<GpuSdfObject>& objects, glm::vec3 camera,
+    bool add(FrameContext& fc, const SdfSceneData& scene, glm::vec3 camera,
              const scene::AccelerationSettings& settings, std::string& error);
     // The cache is off or the frame has no SDF objects: frees the textures.
     void release(fg::FrameGraph& graph);
@@ -73,6 +73,7 @@ private:
     uint32_t m_texLevels = 0, m_texResolution = 0;
     std::vector<ClipmapObject> m_objects;
     std::vector<uint8_t> m_levelsData;  // header + levels, read by the upload pass
+    std::vector<uint32_t> m_flags;      // per object: 1 = exact shape program (ids may name it)
     WorldCacheReport m_report;
 };
 

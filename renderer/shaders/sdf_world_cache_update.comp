@@ -2,9 +2,9 @@
 // world_cache_clipmap.h documents the values and margins, sdf_world_cache.h the passes). One
 // workgroup per job (a box of at most 8^3 voxels of one level), one invocation per voxel:
 //   recompute: D = min(T, d_1) - margin over the job's objects (every object within T + slack of
-//              the box), id = the nearest when d_2 - d_1 >= sqrt(3) h + 2 slack and its distance is
-//              exact (analytic shapes under rigid motion and uniform scale), UNCERTAIN otherwise,
-//              NONE when d_1 >= T;
+//              the box), id = the nearest when d_2 - U >= sqrt(3) h + 2 slack, U an upper bound of
+//              its true distance at c (upperDistance: exact programs under any scale, fields inside
+//              their voxel box), UNCERTAIN otherwise, NONE when d_1 >= T;
 //   splat:     D = min(D, d_1 - margin) over the job's (changed) objects, id = UNCERTAIN unless it
 //              was NONE and stays so (no listed object within T).
 // Distances are sdfObjectDistance(o, c, 1) at the voxel centre c (sdf_scene.glsl), raised outside
@@ -35,6 +35,7 @@ layout(set = 2, binding = 6, std430) readonly buffer CacheLevels {
 };
 layout(set = 2, binding = 7, r32f) uniform image3D cacheDistanceImage;
 layout(set = 2, binding = 8, r32ui) uniform uimage3D cacheIdImage;
+layout(set = 2, binding = 9, std430) readonly buffer CacheObjectFlags { uint cacheObjectFlags[]; };
 
 layout(push_constant) uniform SdfWorldCacheUpdate {
     uvec4 jobs;  // x first job of this dispatch, y object count of the frame
@@ -42,16 +43,39 @@ layout(push_constant) uniform SdfWorldCacheUpdate {
 
 const uint kModeSplat = 1u;
 
-// The object's world distance is exact (not only a bound) when it is an analytic shape and its
-// model is a rotation times a uniform scale (sdf_scene.glsl: sigma_min is then the scale).
-bool exactDistance(uint o) {
-    if (sdfObjects[o].info.x != SDF_KIND_SHAPES) return false;
+const uint kExactProgram = 1u;  // CacheObjectFlags: the shape program's value is exact
+
+// An upper bound of the object's true signed world distance at c, given its value d there (the
+// lower bound sdfObjectDistance); 3e38 when none is known. Exact programs (flag): the local value
+// d / sigma_min is the true local distance. Fields, inside their box of voxel centres: the
+// interpolant plus its interpolation bound (sdf_field.glsl: |trilinear - f| <= bound + 2^-10
+// relative). World from local: outside (> 0) at most sigma_max times, inside at most sigma_min
+// times (a negative value), sigma_max^2 <= the largest Gershgorin row sum of M^T M.
+float upperDistance(uint o, vec3 c, float d) {
     const mat3 m = mat3(sdfObjects[o].model);
     const mat3 g = transpose(m) * m;
-    const float s2 = max(max(g[0][0], g[1][1]), g[2][2]);
-    const float tol = 1e-4 * s2;
-    return abs(g[0][0] - s2) <= tol && abs(g[1][1] - s2) <= tol && abs(g[2][2] - s2) <= tol &&
-           abs(g[0][1]) <= tol && abs(g[0][2]) <= tol && abs(g[1][2]) <= tol;
+    float rowMax = 0.0;
+    for (int i = 0; i < 3; ++i) rowMax = max(rowMax, abs(g[i][0]) + abs(g[i][1]) + abs(g[i][2]));
+    const float sigmaMin = sdfObjects[o].boundsMin.w, sigmaMax = sqrt(rowMax) * 1.000001;
+    if (!(sigmaMin > 0.0)) return 3.0e38;
+    float local;
+    if (sdfObjects[o].info.x == SDF_KIND_SHAPES) {
+        if ((cacheObjectFlags[o] & kExactProgram) == 0u) return 3.0e38;
+        local = d / sigmaMin;
+    } else {
+#ifdef SDF_FIELDS
+        const uint slot = sdfObjects[o].info.y;
+        const vec3 pl = sdfToLocal(o, c);
+        const vec3 x = sdfFieldVoxelCoord(sdfFields[slot], pl);
+        if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, sdfFields[slot].dims.xyz - 1.0))) return 3.0e38;
+        local = sdfFieldDistance(slot, pl) + sdfFieldInterpolationBound(slot, pl);
+        local += 2.0e-3 * abs(local) + 1.0e-3 * sdfFields[slot].origin.w;  // storage rounding
+#else
+        return 3.0e38;
+#endif
+    }
+    const float world = local > 0.0 ? local * sigmaMax : local * sigmaMin;
+    return world + 1.0e-5 * max(1.0, length(c)) + 1.0e-6 * abs(world);  // float evaluation
 }
 
 void main() {
@@ -98,8 +122,10 @@ void main() {
         imageStore(cacheIdImage, t, uvec4(none ? SDF_CACHE_NONE : SDF_CACHE_UNCERTAIN));
         return;
     }
+    // Certain: for every p in the cell the nearest's true distance <= U + sqrt(3)/2 h + slack <=
+    // d_2 - sqrt(3)/2 h - slack <= every other object's true distance.
     uint id = nearest;
-    if (nearest != SDF_CACHE_NONE && !(d2 - d1 >= 1.7320509 * h + 2.0 * slack && exactDistance(nearest)))
+    if (nearest != SDF_CACHE_NONE && !(d2 - 1.7320509 * h - 2.0 * slack >= upperDistance(nearest, c, d1)))
         id = SDF_CACHE_UNCERTAIN;
     imageStore(cacheDistanceImage, t, vec4(d1 - margin));
     imageStore(cacheIdImage, t, uvec4(id));
