@@ -395,8 +395,12 @@ bool ranPass(const SceneRenderer& r, const std::string& name) {
     return false;
 }
 
-// 24 objects of three programs in a 6x4 grid in front of the camera, sun shadows on.
+// A floor (array position 0: created first) under 24 objects of three programs in a 6x4 grid in
+// front of the camera, sun shadows on (so the effects see moved objects too: their shadows move).
 std::vector<ecs::Entity> buildSmallScene(Scene& s) {
+    const ecs::Entity floor =
+        s.object(s.program(ShapeNode::plane(glm::dvec3(0, 1, 0), 0.0)), {0, -1.8f, 0}, 3);
+    s.world.get<ecs::Transform>(floor)->rotation = glm::quat(1, 0, 0, 0);  // level
     const assets::AssetId programs[] = {s.program(ShapeNode::sphere(0.3)),
                                         s.program(ShapeNode::box(glm::dvec3(0.25))),
                                         s.program(ShapeNode::torus(0.25, 0.08))};
@@ -441,7 +445,8 @@ TEST_P(SdfInstancing, MovingObjectUploadsOneRecordPerFrame) {
     const FrameDesc d = deltaFrame(s);
     ImageRGBA8 image;
     ASSERT_TRUE(renderImage(s, r, d, image));
-    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 24u);  // threshold: the first frame sends all
+    const ImageRGBA8 first = image;
+    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 25u);  // threshold: the first frame sends all
     EXPECT_TRUE(r.lastFrameStats().sdfUpload.fullUpload);
     // Frames 1, 2: object 9 moves; frame 3: it stops (its prevModel still changes); frame 4: static.
     const uint32_t expected[] = {1, 1, 1, 0};
@@ -461,6 +466,13 @@ TEST_P(SdfInstancing, MovingObjectUploadsOneRecordPerFrame) {
         const std::string what = "frame " + std::to_string(f);
         expectSameAsFresh(dev(), s, d, image, what.c_str());
     }
+    // The motion is visible (object and shadow), so the comparisons above could see a stale record.
+    const ImageDiff moved = compareImages(image, first);
+    std::printf("  last frame vs the first: %s\n", moved.summary().c_str());
+    EXPECT_GT(moved.pixelsOver, 100u);  // threshold: over 100 px changed by more than 5/255
+    const std::string dir = goldenOutDir("instancing");
+    std::filesystem::create_directories(dir);
+    writePng(dir + "/moving_last_" + (GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl") + ".png", image);
 }
 
 TEST_P(SdfInstancing, AddingAndRemovingObjectsReuploadsWhatShifted) {
@@ -471,13 +483,13 @@ TEST_P(SdfInstancing, AddingAndRemovingObjectsReuploadsWhatShifted) {
     ImageRGBA8 image;
     ASSERT_TRUE(renderImage(s, r, d, image));
 
-    // Remove the object at array position 20 of 24: positions 20..22 now hold other objects.
+    // Remove the object at array position 21 of 25: positions 21..23 now hold other objects.
     s.world.destroy(objects[20]);
     ASSERT_TRUE(renderImage(s, r, d, image));
     // Metric: records sent. Threshold: exactly the 3 that shifted.
     EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 3u);
-    EXPECT_EQ(r.lastFrameStats().sdfObjects, 23u);
-    expectSameAsFresh(dev(), s, d, image, "removed one of 24");
+    EXPECT_EQ(r.lastFrameStats().sdfObjects, 24u);
+    expectSameAsFresh(dev(), s, d, image, "removed one of 25");
 
     // Add one: it lands at the position of its entity index among the others (the renderer orders
     // objects by entity index), and every object from there on shifts up.
@@ -487,15 +499,15 @@ TEST_P(SdfInstancing, AddingAndRemovingObjectsReuploadsWhatShifted) {
     for (auto [e, sr] : s.world.view<ecs::SdfRenderer>())
         if (e.index < added.index) ++position;
     ASSERT_TRUE(renderImage(s, r, d, image));
-    // Metric: records sent. Threshold: exactly the new one and those after it (24 - position).
-    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 24u - position) << "added at " << position;
+    // Metric: records sent. Threshold: exactly the new one and those after it (25 - position).
+    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 25u - position) << "added at " << position;
     expectSameAsFresh(dev(), s, d, image, "added one");
 
-    // Remove the first object: everything shifts, more than half: one plain upload of all 23.
+    // Remove the first object: everything shifts, more than half: one plain upload of all 24.
     s.world.destroy(objects[0]);
     ASSERT_TRUE(renderImage(s, r, d, image));
     EXPECT_TRUE(r.lastFrameStats().sdfUpload.fullUpload);
-    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 23u);
+    EXPECT_EQ(r.lastFrameStats().sdfUpload.objectsUploaded, 24u);
     expectSameAsFresh(dev(), s, d, image, "removed the first (full rewrite)");
 
     ASSERT_TRUE(renderImage(s, r, d, image));
