@@ -36,11 +36,16 @@ bool unbounded(const GpuSdfObject& o) {
     return false;
 }
 
-// Tiles covered by one object's conservative screen rectangle (see sdfTileListCapacity).
-uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_t width, uint32_t height) {
+// The coarse level: tiles of kCoarse x kCoarse 8x8 tiles (64x64 pixels).
+constexpr uint32_t kCoarse = 8;
+
+// Tiles of `scale` x `scale` 8x8 tiles covered by one object's conservative screen rectangle (see
+// sdfTileListCapacity).
+uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_t width, uint32_t height,
+                     uint32_t scale) {
     const uint32_t tilesX = (width + kSdfTileSize - 1) / kSdfTileSize;
     const uint32_t tilesY = (height + kSdfTileSize - 1) / kSdfTileSize;
-    const uint64_t all = uint64_t(tilesX) * tilesY;
+    const uint64_t all = uint64_t((tilesX + scale - 1) / scale) * ((tilesY + scale - 1) / scale);
     if (unbounded(o)) return all;
     // The bounding sphere of the box under `model` (its farthest corner, as the shader computes it),
     // grown by 1 % against rounding.
@@ -70,13 +75,19 @@ uint64_t objectTiles(const GpuSdfObject& o, const SdfTileCullDesc& desc, uint32_
         pmin = glm::min(pmin, pixel);
         pmax = glm::max(pmax, pixel);
     }
-    // Tile range grown by one tile each way, clamped to the frame.
-    auto range = [](double a, double b, uint32_t tiles) -> uint64_t {
+    // 8x8 tile range grown by one tile each way, clamped to the frame, then in tiles of the level.
+    auto range = [scale](double a, double b, uint32_t tiles) -> uint64_t {
         const double t0 = std::max(std::floor(a / kSdfTileSize) - 1.0, 0.0);
         const double t1 = std::min(std::floor(b / kSdfTileSize) + 1.0, double(tiles) - 1.0);
-        return t1 >= t0 ? uint64_t(t1 - t0) + 1 : 0;
+        return t1 >= t0 ? uint64_t(t1) / scale - uint64_t(t0) / scale + 1 : 0;
     };
     return range(pmin.x, pmax.x, tilesX) * range(pmin.y, pmax.y, tilesY);
+}
+
+uint64_t tileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height, uint32_t scale) {
+    uint64_t total = 0;
+    for (const GpuSdfObject& o : desc.objects) total += objectTiles(o, desc, width, height, scale);
+    return std::max<uint64_t>(total, 1);
 }
 
 fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size) {
@@ -118,25 +129,80 @@ fg::BufferRef addTileBounds(FrameContext& fc, const SdfTileCullDesc& desc, uint3
     return data.out;
 }
 
+// One level of the lists: its input (every object, or the coarse level's lists) and output.
+struct CullLevel {
+    fg::BufferRef objects, counter;  // TileCullObject[]; the reservation counters (uint[4])
+    fg::BufferRef ranges, indices;   // in: the coarse lists (invalid: none); out: this level's
+    uint32_t count = 0;              // objects
+    uint64_t capacity = 0;           // entries of this level's indices
+    glm::uvec2 tiles{0};             // tiles of this level
+    uint32_t scale = 1;              // 8x8 tiles per tile side
+    uint32_t coarseTilesX = 0;       // coarse tiles per row of the input lists (0: none)
+};
+
+// "sdf_tile_cull" at one level (sdf_tile_cull.comp); returns its ranges, indices and the counter.
+CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const CullLevel& in, const char* pass,
+                       const std::string& prefix) {
+    struct Data {
+        fg::BufferRef view, objects, counter, inRanges, inIndices, ranges, indices;
+    };
+    const rhi::ShaderDesc& cs = program::compute();
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const program::PushConstants push{
+        glm::uvec4(in.count, uint32_t(in.capacity), in.tiles.x, in.tiles.y),
+        glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f),
+        glm::uvec4(kSdfTileSize * in.scale, in.scale, in.scale == 1 ? 1 : 0, in.coarseTilesX)};
+    const uint64_t rangeBytes = uint64_t(in.tiles.x) * in.tiles.y * 8, indexBytes = in.capacity * 4;
+    const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
+    const std::string rangesName = prefix + "_ranges", indicesName = prefix + "_indices";
+    const Data& data = fc.graph.addPass<Data>(
+        pass, fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.view = b.read(fc.board.find<SceneBuffers>()->view, rhi::Access::UniformRead);  // tile planes
+            d.objects = b.read(in.objects, rhi::Access::ShaderRead);
+            d.counter = b.write(in.counter, rw);
+            // Without input lists the object records stand in for them (bound, never read).
+            d.inRanges = in.ranges.isValid() ? b.read(in.ranges, rhi::Access::ShaderRead) : d.objects;
+            d.inIndices = in.indices.isValid() ? b.read(in.indices, rhi::Access::ShaderRead) : d.objects;
+            d.ranges = b.write(storageBuffer(b, rangesName.c_str(), rangeBytes), rhi::Access::ShaderWrite);
+            d.indices = b.write(storageBuffer(b, indicesName.c_str(), indexBytes), rhi::Access::ShaderWrite);
+        },
+        [&cache = fc.cache, &cs, pipeline, push](const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.view))
+                .set("TileCullObjects", ctx.buffer(d.objects))
+                .set("SdfTileCounter", ctx.buffer(d.counter))
+                .set("SdfTileCoarseRanges", ctx.buffer(d.inRanges))
+                .set("SdfTileCoarseIndices", ctx.buffer(d.inIndices))
+                .set("SdfTileRangesOut", ctx.buffer(d.ranges))
+                .set("SdfTileIndicesOut", ctx.buffer(d.indices));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            ctx.cmd.dispatch(push.counts.z, push.counts.w);
+        });
+    CullLevel out = in;
+    out.counter = data.counter;
+    out.ranges = data.ranges;
+    out.indices = data.indices;
+    return out;
+}
+
 }  // namespace
 
 uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32_t height) {
-    uint64_t total = 0;
-    for (const GpuSdfObject& o : desc.objects) total += objectTiles(o, desc, width, height);
-    return std::max<uint64_t>(total, 1);
+    return tileListCapacity(desc, width, height, 1);
 }
 
 const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc) {
-    const SdfSceneBuffers& sdf = *fc.board.find<SdfSceneBuffers>();
-    const fg::BufferRef view = fc.board.find<SceneBuffers>()->view;  // the tile planes
     SdfTileLists lists;
     lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
     lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
-    const uint32_t count = std::min<uint32_t>(uint32_t(desc.objects.size()), sdf.tracedCount);
-    const uint64_t capacity = std::min(sdfTileListCapacity(desc, fc.width, fc.height), kSdfTileMaxIndices);
-    const uint64_t rangeBytes = uint64_t(lists.tilesX) * lists.tilesY * 8;
-    const uint64_t indexBytes = capacity * 4;
-    lists.bytes = rangeBytes + indexBytes;
+    const uint32_t count =
+        std::min<uint32_t>(uint32_t(desc.objects.size()), fc.board.find<SdfSceneBuffers>()->tracedCount);
+    const uint64_t fine = std::min(sdfTileListCapacity(desc, fc.width, fc.height), kSdfTileMaxIndices);
+    const uint64_t coarse =
+        std::min(tileListCapacity(desc, fc.width, fc.height, kCoarse), kSdfTileMaxIndices);
 
     const fg::BufferRef objects = addTileBounds(fc, desc, count, lists.tilesX, lists.tilesY);
     struct Clear {
@@ -149,38 +215,24 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
         },
         [](const Clear& d, fg::PassContext& ctx) { ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, 16, 0u); });
 
-    struct Data {
-        fg::BufferRef view, objects, counter, ranges, indices;
-    };
-    const rhi::ShaderDesc& cs = program::compute();
-    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    const program::PushConstants push{glm::uvec4(count, uint32_t(capacity), lists.tilesX, lists.tilesY),
-                                      glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f)};
-    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
-    const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
-    const Data& data = fc.graph.addPass<Data>(
-        "sdf_tile_cull", fg::PassKind::Compute,
-        [&](fg::PassBuilder& b, Data& d) {
-            d.view = b.read(view, rhi::Access::UniformRead);
-            d.objects = b.read(objects, rhi::Access::ShaderRead);
-            d.counter = b.write(clear.counter, rw);
-            d.ranges = b.write(storageBuffer(b, "sdf.tile_ranges", rangeBytes), rhi::Access::ShaderWrite);
-            d.indices = b.write(storageBuffer(b, "sdf.tile_indices", indexBytes), rhi::Access::ShaderWrite);
-        },
-        [&cache = fc.cache, &cs, pipeline, push, groupsX, groupsY](const Data& d, fg::PassContext& ctx) {
-            ctx.cmd.bindPipeline(pipeline);
-            ShaderParams params(cs);
-            params.set("View", ctx.buffer(d.view))
-                .set("TileCullObjects", ctx.buffer(d.objects))
-                .set("SdfTileCounter", ctx.buffer(d.counter))
-                .set("SdfTileRangesOut", ctx.buffer(d.ranges))
-                .set("SdfTileIndicesOut", ctx.buffer(d.indices));
-            if (!params.bind(ctx.cmd, cache, pipeline)) return;
-            ctx.cmd.pushConstants(&push, sizeof(push));
-            ctx.cmd.dispatch(groupsX, groupsY);
-        });
-    lists.ranges = data.ranges;
-    lists.indices = data.indices;
+    // Coarse tiles from every object (counter 0), then the 8x8 tiles from their coarse tile's list
+    // (counter 1).
+    const glm::uvec2 coarseTiles = (glm::uvec2(lists.tilesX, lists.tilesY) + (kCoarse - 1)) / kCoarse;
+    CullLevel level{objects, clear.counter, {}, {}, count, coarse, coarseTiles, kCoarse, 0};
+    const CullLevel coarseLists = addCullLevel(fc, desc, level, "sdf_tile_cull_coarse", "sdf.tile_coarse");
+    level = {objects,
+             coarseLists.counter,
+             coarseLists.ranges,
+             coarseLists.indices,
+             count,
+             fine,
+             glm::uvec2(lists.tilesX, lists.tilesY),
+             1,
+             coarseTiles.x};
+    const CullLevel fineLists = addCullLevel(fc, desc, level, "sdf_tile_cull", "sdf.tile");
+    lists.ranges = fineLists.ranges;
+    lists.indices = fineLists.indices;
+    lists.bytes = uint64_t(lists.tilesX) * lists.tilesY * 8 + fine * 4;
     fc.graph.markOutput(lists.ranges);
     fc.graph.markOutput(lists.indices);
 

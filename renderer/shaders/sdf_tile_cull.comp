@@ -1,5 +1,8 @@
 // sdf_tile_cull: the primary tile lists (renderer/features/sdf_cull.h, read through sdf_tiles.glsl).
-// One workgroup of 64 invocations per 8x8 pixel tile of the full-resolution frame:
+// Two levels, one dispatch each: coarse tiles of 64x64 pixels list from all objects, then the 8x8
+// pixel tiles list from their coarse tile's list (a coarse tile on the "all objects" fallback hands
+// its tiles every object), so a tile tests the objects near it instead of all of them.
+// One workgroup of 64 invocations per tile of the level:
 //  1. the tile frustum: the camera position and the rays through the tile's outer pixel corners
 //     (the ray construction of sdf_trace.comp: forward + ndc.x rayRight + ndc.y rayUp), bounded by
 //     the near and far planes (linear depth). The corners enclose every pixel-centre ray of the tile
@@ -37,11 +40,16 @@ struct TileCullObject {
 layout(set = 2, binding = 0, std430) readonly buffer TileCullObjects { TileCullObject cullObjects[]; };
 layout(set = 2, binding = 1, std430) writeonly buffer SdfTileRangesOut { uvec2 rangesOut[]; };
 layout(set = 2, binding = 2, std430) writeonly buffer SdfTileIndicesOut { uint indicesOut[]; };
-layout(set = 2, binding = 3, std430) buffer SdfTileCounter { uint reserved; };
+layout(set = 2, binding = 3, std430) buffer SdfTileCounter { uint reserved[]; };
+// The coarse level's lists (the fine level's input; unused by the coarse level itself).
+layout(set = 2, binding = 4, std430) readonly buffer SdfTileCoarseRanges { uvec2 coarseRanges[]; };
+layout(set = 2, binding = 5, std430) readonly buffer SdfTileCoarseIndices { uint coarseIndices[]; };
 
 layout(push_constant) uniform SdfTileCull {
-    uvec4 counts;  // x objects [0, x) are culled, y capacity of indicesOut, z tilesX, w tilesY
+    uvec4 counts;  // x objects [0, x) are culled, y capacity of indicesOut, z tilesX, w tilesY (this level)
     vec4 clip;     // x near, y far (linear depth)
+    uvec4 level;   // x tile size in pixels, y 8x8 tiles per tile side, z counter index, w coarse
+                   // tiles per row (0: no input list, test every object)
 } cull;
 
 const uint kAllObjects = 0xffffffffu;
@@ -57,7 +65,8 @@ vec4 sidePlane(vec3 along, vec3 corner, vec3 inward) {
 }
 
 void tilePlanes(uvec2 tile) {
-    vec2 lo = vec2(tile * 8u), hi = min(vec2((tile + 1u) * 8u), view.viewport.xy);
+    uint size = cull.level.x;
+    vec2 lo = vec2(tile * size), hi = min(vec2((tile + 1u) * size), view.viewport.xy);
     vec2 ndcLo = lo * view.viewport.zw * 2.0 - 1.0, ndcHi = hi * view.viewport.zw * 2.0 - 1.0;
     vec3 f = view.forward.xyz, r = view.rayRight.xyz, u = view.rayUp.xyz;
     g_planes[0] = sidePlane(u, f + ndcLo.x * r, r);
@@ -71,8 +80,9 @@ void tilePlanes(uvec2 tile) {
 
 // Whether the object's box may meet the frustum of `tile`.
 bool objectInTile(uint obj, uvec2 tile) {
-    uvec4 rect = cullObjects[obj].rect;
-    if (any(lessThan(tile, rect.xy)) || any(greaterThan(tile, rect.zw))) return false;
+    uvec4 rect = cullObjects[obj].rect;  // in 8x8 tiles
+    uvec2 first = tile * cull.level.y, last = first + (cull.level.y - 1u);
+    if (any(lessThan(last, rect.xy)) || any(greaterThan(first, rect.zw))) return false;
     vec4 centre = cullObjects[obj].centre;
     if (centre.w < 0.0) return true;  // unbounded (a plane): always listed
     vec3 c = centre.xyz;  // from the camera
@@ -95,11 +105,26 @@ shared uint s_base;
 shared bool s_overflow;
 shared uint s_mask[2];
 
+// The candidates: every object, or the coarse tile's list (ascending, so this tile's is too).
+uint g_first;
+bool g_direct;
+uint candidate(uint k) { return g_direct ? k : coarseIndices[g_first + k]; }
+
 void main() {
     uvec2 tile = gl_WorkGroupID.xy;
     uint tileIndex = tile.y * cull.counts.z + tile.x;
     uint lid = gl_LocalInvocationIndex;
     uint count = cull.counts.x;
+    g_first = 0u;
+    g_direct = true;
+    if (cull.level.w != 0u) {
+        uvec2 coarse = coarseRanges[(tile.y / 8u) * cull.level.w + tile.x / 8u];
+        if (coarse.y != kAllObjects) {
+            g_first = coarse.x;
+            count = coarse.y;
+            g_direct = false;
+        }
+    }
     tilePlanes(tile);
     if (lid == 0u) s_count = 0u;
     barrier();
@@ -107,8 +132,8 @@ void main() {
     // 1. Count; the first 32 chunks' results stay in a register mask for step 3.
     uint mine = 0u, bits = 0u;
     for (uint chunk = 0u; chunk * 64u < count; ++chunk) {
-        uint obj = chunk * 64u + lid;
-        if (obj < count && objectInTile(obj, tile)) {
+        uint k = chunk * 64u + lid;
+        if (k < count && objectInTile(candidate(k), tile)) {
             ++mine;
             if (chunk < 32u) bits |= 1u << chunk;
         }
@@ -119,7 +144,7 @@ void main() {
     // 2. Reserve the tile's slots (the prefix sum across tiles).
     if (lid == 0u) {
         uint n = s_count;
-        uint base = n > 0u ? atomicAdd(reserved, n) : 0u;
+        uint base = n > 0u ? atomicAdd(reserved[cull.level.z], n) : 0u;
         s_overflow = base > cull.counts.y || n > cull.counts.y - base;
         s_base = base;
         rangesOut[tileIndex] = s_overflow ? uvec2(0u, kAllObjects) : uvec2(base, n);
@@ -130,8 +155,9 @@ void main() {
     // 3. Write the indices in ascending order, chunk by chunk.
     uint base = s_base, total = s_count, written = 0u;
     for (uint chunk = 0u; chunk * 64u < count && written < total; ++chunk) {
-        uint obj = chunk * 64u + lid;
-        bool accept = obj < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj, tile));
+        uint k = chunk * 64u + lid;
+        uint obj = k < count ? candidate(k) : 0u;
+        bool accept = k < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj, tile));
         if (lid < 2u) s_mask[lid] = 0u;
         barrier();
         if (accept) atomicOr(s_mask[lid >> 5u], 1u << (lid & 31u));
