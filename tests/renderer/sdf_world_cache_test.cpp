@@ -16,6 +16,7 @@
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <random>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "engine/assets/asset_manager.h"
+#include "engine/assets/primitives.h"
 #include "engine/ecs/components.h"
 #include "engine/ecs/world.h"
 #include "engine/sdf/shape_program.h"
@@ -46,9 +48,14 @@ struct RefObject {
     const sdf::ShapeProgram* program = nullptr;  // rigid + uniform scale: exact
     glm::dmat4 inv{1.0};
     double scale = 1.0;
-    bool axisBox = false;  // a box under non-uniform axis-aligned scale: exact box distance
+    bool axisBox = false;   // a box under non-uniform axis-aligned scale: exact box distance
+    bool localBox = false;  // a field baked from a box mesh of these local half extents
     glm::dvec3 centre{0.0}, half{0.0};
     double distance(const glm::dvec3& p) const {
+        if (localBox) {
+            const glm::dvec3 q = glm::abs(glm::dvec3(inv * glm::dvec4(p, 1.0))) - half;
+            return scale * (glm::length(glm::max(q, 0.0)) + std::min(std::max({q.x, q.y, q.z}), 0.0));
+        }
         if (axisBox) {
             const glm::dvec3 q = glm::abs(p - centre) - half;
             return glm::length(glm::max(q, 0.0)) + std::min(std::max({q.x, q.y, q.z}), 0.0);
@@ -96,6 +103,29 @@ struct CacheScene {
         objects.push_back(e);
         return e;
     }
+    // A field baked from a box mesh of half extents `half` (its distance is the exact box distance).
+    ecs::Entity addBakedBox(float half, glm::vec3 pos, glm::quat rot, float scale) {
+        assets::MeshData mesh;
+        std::string error;
+        EXPECT_TRUE(assets::makeBox(glm::vec3(half), mesh, error)) << error;
+        const assets::AssetId meshId = assets.addMesh("cache-test-box", mesh, error);
+        EXPECT_NE(meshId, 0u) << error;
+        const assets::AssetId fieldId = assets.bakeSdf(meshId, sdf::BakeSettings{}, error);
+        EXPECT_NE(fieldId, 0u) << error;
+        ecs::Entity e = world.create();
+        ecs::Transform* t = world.add<ecs::Transform>(e);
+        t->position = pos;
+        t->rotation = rot;
+        t->scale = glm::vec3(scale);
+        ecs::SdfRenderer sr;
+        sr.sdf = fieldId;
+        sr.source = ecs::SdfSource::Field;
+        world.add<ecs::SdfRenderer>(e, sr);
+        objects.push_back(e);
+        boxHalf[e.index] = half;
+        return e;
+    }
+    std::map<uint32_t, double> boxHalf;  // entity -> half extent of its baked box
     void move(ecs::Entity e, glm::vec3 pos) { world.get<ecs::Transform>(e)->position = pos; }
     render::FrameDesc frame(const scene::AccelerationSettings& accel) const {
         render::FrameDesc d;
@@ -122,6 +152,12 @@ struct CacheScene {
             const glm::dvec3 s(glm::length(glm::dvec3(m[0])), glm::length(glm::dvec3(m[1])),
                                glm::length(glm::dvec3(m[2])));
             o.scale = s.x;
+            if (sr.source == ecs::SdfSource::Field) {
+                o.localBox = true;
+                o.half = glm::dvec3(boxHalf.at(e.index));
+                out.push_back(o);
+                continue;
+            }
             if (std::abs(s.x - s.y) > 1e-6 * s.x || std::abs(s.x - s.z) > 1e-6 * s.x) {
                 // Only axis-aligned boxes are scaled non-uniformly here (half extents 0.5 locally).
                 o.axisBox = true;
@@ -329,6 +365,37 @@ TEST_P(SdfWorldCacheTest, MemoryFollowsTheScene) {
     one.render(r1, a);
     EXPECT_FALSE(r1.lastFrameStats().worldCache.active);
     EXPECT_EQ(r1.lastFrameStats().memory.worldCache, 0u);
+}
+
+// Ids for fields and inexact programs: a field baked from a box mesh gets named cells (an upper
+// bound of its distance is known inside its voxel box) and they are correct; a smooth union (its
+// value is only a lower bound) is never named. The smooth union's reference distance is its
+// program value, a lower bound: the checks against it are stricter than against its true distance.
+TEST_P(SdfWorldCacheTest, FieldsAreNamedInexactProgramsNever) {
+    CacheScene s;
+    s.world.get<ecs::Transform>(s.camera)->position = {0.0f, 0.8f, 1.0f};  // level 0 (4 units) holds them
+    s.addBakedBox(0.5f, {0.8f, 0.6f, 0.0f}, glm::quat(glm::radians(glm::vec3(10, 30, 0))), 1.2f);
+    const ecs::Entity blob =
+        s.add(ShapeNode::csg(sdf::CsgOp::Union, {ShapeNode::sphere(0.4), ShapeNode::sphere(0.35)}, 0.3),
+              {-0.9f, 0.5f, 0.2f});
+    s.add(ShapeNode::sphere(0.3), {0.0f, 1.6f, -0.5f});
+    SceneRenderer r(dev());
+    s.render(r, accel());
+    WorldCacheReadback c;
+    std::string error;
+    ASSERT_TRUE(r.readWorldCache(c, error)) << error;
+    expectConservative(c, s.refs(), "field + smooth union");
+    size_t field = 0, smooth = 0;
+    for (uint32_t id : c.ids) {
+        if (id >= c.objectKeys.size()) continue;
+        if (c.objectKeys[id] == blob.index)
+            ++smooth;
+        else if (s.boxHalf.count(c.objectKeys[id]))
+            ++field;
+    }
+    std::printf("  texels naming the field: %zu, the smooth union: %zu\n", field, smooth);
+    EXPECT_GT(field, 100u);  // fields are named where their upper bound is known
+    EXPECT_EQ(smooth, 0u);   // a program with smooth CSG has no upper bound: never named
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, SdfWorldCacheTest, testing::ValuesIn(gpuBackends()), backendName);
