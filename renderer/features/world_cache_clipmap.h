@@ -17,13 +17,19 @@
 //
 // Values (conservative; the GPU pass writes them): voxel v with centre c
 //   D(v)  = min(T_i, min over objects d_obj(c)) - margin_i,  margin_i = sqrt(3)/2 h_i + s
-//   id(v) = the nearest object when d_2 - d_1 >= sqrt(3) h_i + 2 s (d_2 the second nearest, at most
-//           T_i), UNCERTAIN otherwise, NONE when no object is within T_i
-// with T_i = 8 h_i the truncation, s = h_0 / 4 the motion slack. For p in the cell |p - c| <=
-// sqrt(3)/2 h_i, so the true distance at p >= D(v) as long as no object moved more than s since
-// the value was computed; the id rule is the certain version of mTec's "neighbouring cells disagree"
-// rule: the nearest object gains at most sqrt(3)/2 h + s and every other loses at most as much
-// anywhere in the cell, so the named object is the nearest everywhere in it.
+//   id(v) = the nearest object when d_2 - U_1 >= sqrt(3) h_i + 2 s (d_2 the second-nearest value,
+//           at most T_i; U_1 an upper bound of the nearest's true distance at c), UNCERTAIN
+//           otherwise or when no upper bound is known, NONE when no object is within T_i
+// with T_i = 8 h_i the truncation, s = h_0 / 4 the motion slack, d_obj the conservative
+// sdfObjectDistance (raised outside the object's bounds box to the box distance). For p in the
+// cell |p - c| <= sqrt(3)/2 h_i, so the true distance at p >= D(v) as long as no object moved more
+// than s since the value was computed; the id rule is the certain version of mTec's "neighbouring
+// cells disagree" rule: the nearest object's true distance gains at most sqrt(3)/2 h + s and every
+// other's loses at most as much anywhere in the cell, so the named object is the nearest
+// everywhere in it. U_1 (sdf_world_cache_update.comp): exact shape programs (shapes, unions,
+// transforms) under any scale (sigma_max / sigma_min times the value outside), fields inside their
+// box of voxel centres (interpolant + interpolation bound); smooth or subtractive CSG, repetition
+// and fields outside their box have none (their cells stay UNCERTAIN).
 //
 // Changes: per object (keyed by entity index) the world box corners at its last cache update are
 // kept. It moved when a corner moved more than s / 2 since then: two values computed at states
