@@ -38,6 +38,14 @@ bool exactProgram(const std::vector<sdf::ShapeInstruction>& records, uint32_t fi
     return true;
 }
 
+// Per-frame buffer sizes rounded up to a power of two (at least 4 KiB): the graph's pool reuses a
+// buffer of the same size, so frames with varying job counts create no new buffers or bind groups.
+uint64_t pooledSize(uint64_t bytes) {
+    uint64_t size = 4096;
+    while (size < bytes) size *= 2;
+    return size;
+}
+
 rhi::SamplerHandle nearestSampler(GpuCache& cache) {
     rhi::SamplerDesc d;  // integer textures need nearest filtering to be complete on GL
     d.minFilter = d.magFilter = rhi::Filter::Nearest;
@@ -191,10 +199,9 @@ bool SdfWorldCache::add(FrameContext& fc, const SdfSceneData& scene, glm::vec3 c
             uint64_t bytes = 0;
             d.view = view;
             d.view.levels = uploadBuffer(b, "cache.levels", m_levelsData.size(), bytes);
-            d.jobs = uploadBuffer(b, "cache.jobs", std::max<uint64_t>(cm.jobs().size(), 1) * sizeof(CacheJob),
-                                  bytes);
-            d.list = uploadBuffer(b, "cache.list", std::max<uint64_t>(cm.objectList().size(), 1) * 4, bytes);
-            d.flags = uploadBuffer(b, "cache.flags", m_flags.size() * 4, bytes);
+            d.jobs = uploadBuffer(b, "cache.jobs", pooledSize(cm.jobs().size() * sizeof(CacheJob)), bytes);
+            d.list = uploadBuffer(b, "cache.list", pooledSize(cm.objectList().size() * 4), bytes);
+            d.flags = uploadBuffer(b, "cache.flags", pooledSize(m_flags.size() * 4), bytes);
             view.levels = d.view.levels;
             view.bytes += m_levelsData.size();
             in.view = d.view;
