@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstring>
+#include <utility>
 
 #include <glm/mat3x3.hpp>
 
@@ -215,7 +216,7 @@ bool SdfSceneStore::plan(fg::FrameGraph& graph, const SdfSceneData& data) {
     const bool newFields = data.hasFields() && reserve(graph, m_fields, fieldBytes, "sdf.fields");
     m_stats = {};
     const uint64_t limit = m_device.info().limits.maxStorageBufferRange;
-    if (limit > 0 && arrayBytes(data.objects) > limit)
+    if (limit > 0 && arrayBytes(data.objects) > limit && !std::exchange(m_warnedLimit, true))
         log::warn(
             "sdf_upload: {} SDF objects need {} bytes, more than the device's storage buffer range ({} "
             "bytes, {} objects): the passes cannot bind them",

@@ -136,6 +136,7 @@ private:
     bool m_fullObjects = false, m_writeRecords = false, m_writeFields = false;
     const void* m_recordData = nullptr;  // the frame's records (or one zero record)
     uint64_t m_recordBytes = 0;
+    bool m_warnedLimit = false;  // a frame had more objects than one binding covers (warned once)
     Stats m_stats;
 };
 
