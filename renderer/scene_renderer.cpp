@@ -44,6 +44,7 @@
 #include "renderer/features/scene_upload.h"
 #include "renderer/features/sdf_atlas.h"
 #include "renderer/features/sdf_cull.h"
+#include "renderer/features/sdf_effects_cull.h"
 #include "renderer/features/sdf_scene.h"
 #include "renderer/features/sdf_surface.h"
 #include "renderer/features/sdf_trace.h"
@@ -1029,6 +1030,19 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.triangles = triangles;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
+    // The shadow / AO tile lists and their counters for readBuffer (features/sdf_effects_cull.h).
+    if (const SdfEffectsCullCounters* fx = board.find<SdfEffectsCullCounters>()) {
+        const SdfCullLists& l = *board.find<SdfCullLists>();
+        auto keep = [&](const char* name, fg::BufferRef ref, uint64_t bytes) {
+            keptBuffers[name] = {graph.physicalBuffer(ref), bytes};
+        };
+        keep("sdf.effects_cull_counters", fx->buffer, 16);
+        keep("sdf.effects_tile_indices", fx->indices, fx->indexBytes);
+        const SdfTileLists& any = l.shadow.valid() ? l.shadow : l.ao;
+        const uint64_t tiles = uint64_t(any.tilesX) * any.tilesY;
+        if (l.shadow.valid()) keep("sdf.shadow_tile_ranges", l.shadow.ranges, tiles * l.shadow.layers * 8);
+        if (l.ao.valid()) keep("sdf.ao_tile_ranges", l.ao.ranges, tiles * 8);
+    }
 }
 
 std::vector<fg::FrameTimings> SceneRenderer::takeTimings(bool wait) {

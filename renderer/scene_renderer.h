@@ -166,7 +166,9 @@ public:
     bool readWorldCache(WorldCacheReadback& out, std::string& error);
 
     // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices" (the
-    // primary tile lists, renderer/features/sdf_cull.h, when the frame built them); false otherwise.
+    // primary tile lists, renderer/features/sdf_cull.h, when the frame built them), and with the
+    // shadow / AO lists (renderer/features/sdf_effects_cull.h) "sdf.shadow_tile_ranges",
+    // "sdf.ao_tile_ranges", "sdf.effects_tile_indices", "sdf.effects_cull_counters"; false otherwise.
     bool readBuffer(const std::string& name, std::vector<uint8_t>& bytes, std::string& error);
 
     // The last frame's statistics; its pass timings are waited for if they have not arrived yet

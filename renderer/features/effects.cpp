@@ -2,6 +2,7 @@
 
 #include "renderer/features/effects_upsample.h"
 #include "renderer/features/sdf_ao.h"
+#include "renderer/features/sdf_effects_cull.h"
 #include "renderer/features/sdf_reflection.h"
 #include "renderer/features/sdf_shadow.h"
 #include "renderer/features/sdf_thickness.h"
@@ -16,6 +17,7 @@ EffectsDesc resolveEffects(const scene::RenderSettings& settings) {
     d.reflections = settings.reflections;
     d.trace = settings.resolvedTrace();
     d.quality = settings.quality;
+    d.acceleration = settings.acceleration;
     const uint32_t q = uint32_t(settings.quality);  // low, medium, high, reference
     static constexpr uint32_t kShadowSteps[] = {32, 64, 128, 1024};
     // Reference multi-ray AO traces every direction to a binary hit (up to 256 steps each). With
@@ -34,6 +36,9 @@ EffectsDesc resolveEffects(const scene::RenderSettings& settings) {
 
 void addEffects(FrameContext& fc, const EffectsDesc& desc) {
     fc.board.add<EffectsLowRes>();  // modules replace it with their part filled in
+    // Shadow and AO tile lists first (they read the finished G-buffer depth).
+    if (desc.acceleration.culling && (desc.shadowLayers > 0 || desc.ao.variant != scene::AoVariant::Off))
+        addSdfEffectsCull(fc, desc);
     if (desc.shadowLayers > 0) addSdfShadow(fc, desc);
     if (desc.ao.variant != scene::AoVariant::Off) addSdfAo(fc, desc);
     if (desc.thickness) addSdfThickness(fc, desc);

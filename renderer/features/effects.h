@@ -67,6 +67,9 @@ struct EffectsDesc {
     float nearPlane = 0.1f;
     float farPlane = 1000.0f;
     float footprint = 0.0f;  // pixel size per unit distance: 2 / (height * proj[1][1])
+    // Culling (shadow / AO tile lists, renderer/features/sdf_effects_cull.h) and the world cache in
+    // the cone and AO marches; off: every casting object at every step.
+    scene::AccelerationSettings acceleration;
     bool any() const {
         return shadowLayers > 0 || ao.variant != scene::AoVariant::Off || thickness || reflection;
     }

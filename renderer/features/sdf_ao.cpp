@@ -10,6 +10,7 @@
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
 #include "renderer/features/fullscreen.h"
+#include "renderer/features/sdf_effects_cull.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -44,6 +45,8 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     struct Data {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
+        SdfTileLists lists;
+        SdfWorldCacheView cache;  // the world cache, or stand-ins the shader never samples
         fg::TextureRef depth, normal, out;
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
@@ -60,10 +63,19 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     const uint32_t h = full ? fc.height : std::max(1u, uint32_t(std::lround(float(fc.height) * scale)));
     const bool exact =
         desc.ao.variant == scene::AoVariant::MultiRay && desc.quality == scene::TraceQuality::Reference;
+    const SdfCullLists* cull = fc.board.find<SdfCullLists>();
+    const SdfTileLists lists = cull && desc.acceleration.culling ? cull->ao : SdfTileLists{};
+    bool cacheBound = false;
+    const SdfWorldCacheView cacheView = sdfEffectsWorldCache(fc, cacheBound);
+    const uint32_t cullFlags = (!desc.acceleration.culling ? 2u
+                                : lists.valid()            ? 1u
+                                                           : 0u) |
+                               (cacheBound && desc.acceleration.worldCache ? 4u : 0u) |
+                               (cacheBound && desc.acceleration.idField ? 8u : 0u);
     const program::PushConstants push{
         glm::uvec4(sdfScene.objectCount, desc.ao.rays, exact ? 1u : 0u, aoStepLimit(desc, exact)),
         glm::vec4(desc.ao.maxDistance, desc.ao.strength, desc.trace.fieldSafety, desc.footprint),
-        glm::vec4(desc.trace.hitEpsilon, 0.0f, 0.0f, 0.0f)};
+        glm::vec4(desc.trace.hitEpsilon, 0.0f, 0.0f, 0.0f), glm::uvec4(lists.tilesX, 0u, cullFlags, 0u)};
 
     const Data& pass = fc.graph.addPass<Data>(
         "sdf_ao", fg::PassKind::Compute,
@@ -83,6 +95,10 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
             b.write(d.out, rhi::Access::ShaderWrite);
             b.read(d.scene.view, rhi::Access::UniformRead);
             readSdfScene(b, d.sdf);
+            d.lists = lists;
+            readSdfEffectsLists(b, d.lists);
+            d.cache = cacheView;
+            readSdfWorldCache(b, d.cache);
         },
         [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h](const Data& d,
                                                                               fg::PassContext& ctx) {
@@ -93,6 +109,8 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("aoImage", ctx.texture(d.out));
             setSdfScene(params, ctx, d.sdf, atlasSampler);
+            setSdfEffectsLists(params, ctx, d.lists, d.sdf.objects);
+            setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, w, h);

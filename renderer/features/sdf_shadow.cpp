@@ -11,6 +11,7 @@
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
 #include "renderer/features/fullscreen.h"
+#include "renderer/features/sdf_effects_cull.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -37,6 +38,8 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     struct Data {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
+        SdfTileLists lists;
+        SdfWorldCacheView cache;  // the world cache, or stand-ins the shader never samples
         fg::TextureRef depth, normal, out;
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
@@ -49,10 +52,20 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
     const ShadowSize size = shadowSize(fc, desc.shadows.resolutionScale);
     const uint32_t layers = desc.shadowLayers;
+    const SdfCullLists* cull = fc.board.find<SdfCullLists>();
+    const SdfTileLists lists = cull && desc.acceleration.culling ? cull->shadow : SdfTileLists{};
+    bool cacheBound = false;
+    const SdfWorldCacheView cacheView = sdfEffectsWorldCache(fc, cacheBound);
+    const uint32_t cullFlags = (!desc.acceleration.culling ? 2u
+                                : lists.valid()            ? 1u
+                                                           : 0u) |
+                               (cacheBound && desc.acceleration.worldCache ? 4u : 0u) |
+                               (cacheBound && desc.acceleration.idField ? 8u : 0u);
     const program::PushConstants push{
         glm::uvec4(sdfScene.objectCount, desc.shadows.maxSteps, layers, desc.shadows.hard ? 1u : 0u),
         glm::uvec4(size.width, size.height, fc.width, fc.height),
-        glm::vec4(desc.trace.fieldSafety, desc.footprint, desc.farPlane, 0.0f)};
+        glm::vec4(desc.trace.fieldSafety, desc.footprint, desc.farPlane, 0.0f),
+        glm::uvec4(lists.tilesX, lists.tilesX * lists.tilesY, cullFlags, 0u)};
 
     fg::TextureRef lowRes;
     fc.graph.addPass<Data>(
@@ -76,6 +89,10 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
+            d.lists = lists;
+            readSdfEffectsLists(b, d.lists);
+            d.cache = cacheView;
+            readSdfWorldCache(b, d.cache);
         },
         [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers](const Data& d,
                                                                                       fg::PassContext& ctx) {
@@ -88,6 +105,8 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("shadowImage", ctx.texture(d.out));
             setSdfScene(params, ctx, d.sdf, atlasSampler);
+            setSdfEffectsLists(params, ctx, d.lists, d.sdf.objects);
+            setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, size.width, size.height, layers);

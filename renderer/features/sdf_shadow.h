@@ -13,6 +13,12 @@
 // cut by the nearest occluder edge along the cone (sdf_cone.glsl documents the estimate and its
 // bias).
 //
+// Acceleration (EffectsDesc::acceleration): culling starts each ray's cull from the pixel's tile
+// list of its layer (SdfCullLists::shadow, renderer/features/sdf_effects_cull.h); off, every casting
+// object is evaluated at every step. worldCache / idField (when SdfWorldCacheView is published): the
+// march steps by the cached world distance where the cone is clear and evaluates the id field's
+// object alone where it is certain (renderer/shaders/sdf_cone.glsl).
+//
 // Output: resolutionScale 1 writes Effects::shadow directly; below 1 a transient R8_UNORM strip
 // (lowW * layers) x lowH published as EffectsLowRes::shadow for effects_upsample.
 #pragma once

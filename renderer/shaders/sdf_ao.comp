@@ -4,7 +4,14 @@
 //  1. the full-resolution pixel containing the AO pixel's centre (effectsFullPixel) gives depth and
 //     normal; background pixels write AO 1 and the zero normal;
 //  2. culling: objects that take part in AO (kSdfObjectCastsShadows) whose bounds box lies within
-//     maxDistance of the point, up to kListSize of them (more: every object is evaluated);
+//     2 maxDistance + the start offset of the point, up to kListSize of them (more: every candidate
+//     is evaluated). Every variant reads only distances below maxDistance at points at most
+//     maxDistance + offset from the point (five-tap and multi-ray taps count d < t, cones
+//     d < t tan 25 deg and step past maxDistance once d >= maxDistance - t, exact rays end there),
+//     so an object farther than that changes nothing: culled and unculled AO agree. The
+//     candidates are the full-resolution pixel's AO tile list when the frame built one (flag
+//     kTileLists, renderer/features/sdf_effects_cull.h), else every object; kNoCull (acceleration
+//     culling off) evaluates every casting object at every step without box tests;
 //  3. the variant (default five-tap, MULTI_RAY, CONES) computes the occlusion in [0, 1] and a bent
 //     normal; the result is AO = 1 - strength * occlusion.
 // Rays and taps start `offset` above the surface along the normal (a few pixel footprints: the
@@ -24,6 +31,15 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SDF_FIELDS_BINDING 8
 #define SDF_ATLAS_BINDING 9
 #include "sdf_scene.glsl"
+#define SDF_TILES_SET 2
+#define SDF_TILE_RANGES_BINDING 10
+#define SDF_TILE_INDICES_BINDING 11
+#include "sdf_tiles.glsl"
+#define SDF_CACHE_SET 2
+#define SDF_CACHE_DISTANCE_BINDING 12
+#define SDF_CACHE_IDS_BINDING 13
+#define SDF_CACHE_LEVELS_BINDING 14
+#include "sdf_world_cache.glsl"
 #include "sdf_cone.glsl"
 
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
@@ -34,9 +50,14 @@ layout(push_constant) uniform SdfAo {
     uvec4 counts;  // x objects, y rays (multi-ray), z flags (1 = exact binary visibility), w step limit
     vec4 params;   // x maxDistance, y strength, z field safety, w pixel footprint per unit distance
     vec4 eps;      // x hit epsilon (pixel footprints)
+    uvec4 tiles;   // x tilesX, z flags (kTileLists, kNoCull, kCache, kIdField)
 } ao;
 
 const uint kExactFlag = 1u;
+const uint kTileLists = 1u;  // tiles.z: SdfTileRanges / SdfTileIndices hold this frame's AO lists
+const uint kNoCull = 2u;     // tiles.z: culling off
+const uint kCache = 4u;      // tiles.z: the world cache where the point is beyond maxDistance of all
+const uint kIdField = 8u;    // tiles.z: the id field's object where it is certain
 const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
 const int kListSize = 16;
 const float kPi = 3.14159265358979;
@@ -44,14 +65,40 @@ const float kPi = 3.14159265358979;
 uint g_list[kListSize];
 int g_count;
 bool g_overflow;
+// The candidates: the tile list [g_first, g_first + g_candidates) when g_fromTile, else the objects
+// [0, g_candidates).
+uint g_first;
+uint g_candidates;
+bool g_fromTile;
+bool g_noCull;
 
-// Collects the occluders within maxDistance of p (their bounds box distance, a lower bound).
-void cullObjects(vec3 p) {
+uint candidate(uint i) { return g_fromTile ? sdfTileIndices[g_first + i] : i; }
+
+// Collects the occluders within `reach` of p (their bounds box distance, a lower bound) among the
+// candidates of the full-resolution pixel.
+void cullObjects(vec3 p, ivec2 pixel, float reach) {
     g_count = 0;
     g_overflow = false;
-    for (uint obj = 0u; obj < ao.counts.x; ++obj) {
+    g_first = 0u;
+    g_candidates = ao.counts.x;
+    g_fromTile = false;
+    g_noCull = (ao.tiles.z & kNoCull) != 0u;
+    if (g_noCull) {
+        g_overflow = true;
+        return;
+    }
+    if ((ao.tiles.z & kTileLists) != 0u) {
+        uvec2 range = sdfTileRanges[sdfTileIndex(pixel, ao.tiles.x)];
+        if (range.y != 0xffffffffu) {  // 0xffffffff: the list overflowed, every object
+            g_first = range.x;
+            g_candidates = range.y;
+            g_fromTile = true;
+        }
+    }
+    for (uint i = 0u; i < g_candidates; ++i) {
+        uint obj = candidate(i);
         if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) continue;
-        if (sdfBoxDistance(obj, sdfToLocal(obj, p)) > ao.params.x) continue;
+        if (sdfBoxDistance(obj, sdfToLocal(obj, p)) > reach) continue;
         if (g_count == kListSize) {
             g_overflow = true;
             return;
@@ -61,16 +108,36 @@ void cullObjects(vec3 p) {
 }
 
 // Conservative distance from p to the nearest listed occluder (3e38: none). An object whose box is
-// farther than the best distance so far is not evaluated.
+// farther than the best distance so far is not evaluated. With the world cache (kCache): a cached
+// distance of at least maxDistance is returned as it is (every variant reads only distances below
+// maxDistance: the taps, cones and rays come out the same); with the id field (kIdField) the object
+// the cell names, when certain and taking part in AO, is the nearest occluder and is evaluated alone.
 float sceneDistance(vec3 p) {
+    if ((ao.tiles.z & (kCache | kIdField)) != 0u) {
+        float cached, voxel;
+        uint obj;
+        if (sdfCacheLookup(p, cached, voxel, obj)) {
+            if ((ao.tiles.z & kCache) != 0u && cached >= ao.params.x) return cached;
+            if ((ao.tiles.z & kIdField) != 0u && obj < ao.counts.x && (sdfObjects[obj].params.y & kCastsShadows) != 0u) {
+                vec3 pl = sdfToLocal(obj, p);
+                float box = sdfBoxDistance(obj, pl);
+                float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, ao.params.z);
+                return box > 0.0 ? max(box, od) : od;
+            }
+        }
+    }
     float d = 3.0e38;
-    int count = g_overflow ? int(ao.counts.x) : g_count;
+    int count = g_overflow ? int(g_candidates) : g_count;
     for (int i = 0; i < count; ++i) {
-        uint obj = g_overflow ? uint(i) : g_list[i];
+        uint obj = g_overflow ? candidate(uint(i)) : g_list[i];
         if (g_overflow && (sdfObjects[obj].params.y & kCastsShadows) == 0u) continue;
         vec3 pl = sdfToLocal(obj, p);
-        if (sdfBoxDistance(obj, pl) >= d) continue;
-        d = min(d, sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, ao.params.z));
+        // The larger of two lower bounds (box, object): skipping a box no nearer than the best so far
+        // changes nothing, so culled and unculled AO see the same distances.
+        float box = sdfBoxDistance(obj, pl);
+        if (!g_noCull && box >= d) continue;
+        float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, ao.params.z);
+        d = min(d, box > 0.0 ? max(box, od) : od);  // box 0: inside the box, the object's sign counts
     }
     return d;
 }
@@ -195,7 +262,7 @@ void main() {
     float offset = max(max(4.0 * ao.eps.x * footprint, sdfSurfaceBias(p, footprint, ao.counts.x)),
                        2e-5 * max(1.0, length(p)));
     vec3 o = p + n * offset;
-    cullObjects(p);
+    cullObjects(p, pixel, 2.0 * ao.params.x + offset);
 
     vec4 result;  // x occlusion, yzw bent normal (unnormalised)
 #if defined(MULTI_RAY)

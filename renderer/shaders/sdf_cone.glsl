@@ -48,7 +48,21 @@
 //
 // Culling: an object takes part in a ray only if its bounds box, grown by the cone's radius where
 // the cone could reach it, meets the ray in [tMin, tMax]; up to SDF_CONE_LIST objects are kept in
-// a list, a ray meeting more boxes marches over all objects (correct, slower).
+// a list, a ray meeting more boxes marches over all its candidates (correct, slower). The
+// candidates are every object [0, objectCount) (sdfConeVisibility), or, in a pass that includes
+// sdf_tiles.glsl first, its tile's shadow list (sdfConeSourceTile, issue 13: the lists of
+// renderer/features/sdf_effects_cull.h). sdfConeSourceNoCull turns all culling off: every casting
+// object at every step, no box test (the benchmarks' "no optimization"). sdfConeTrace marches with
+// the source set last; sdfConeVisibility keeps its signature and always starts from every object.
+//
+// World cache (issue 13; Wright: object distances near the cone's start, the global distance
+// beyond): in a pass that includes sdf_world_cache.glsl first, sdfConeUseCache(cache, ids) after
+// the source lets the march read the cached world distance at each point (a conservative lower
+// bound over all objects). Where it is at least the cone's cross-section radius (epsilon at least;
+// 4 epsilons for a hard ray) no occluder can reach into the cone there (x >= 1 leaves the estimate
+// unchanged): the march steps by it without evaluating objects. Nearer than that, with ids, the
+// object the id field names for the point's cell, when it is certain and casts shadows, is the
+// nearest occluder there and is evaluated alone; otherwise the candidates as without the cache.
 #ifndef PENUMBRA_SDF_CONE_GLSL
 #define PENUMBRA_SDF_CONE_GLSL
 
@@ -93,11 +107,67 @@ vec2 g_coneInterval[SDF_CONE_LIST];
 int g_coneCount;
 bool g_coneOverflow;
 
-// Fills the list of objects the cone can meet; returns false when none can.
+// The candidates of the per-ray cull: g_coneFirst / g_coneCandidates index the tile list when
+// g_coneFromTile, else the objects [0, g_coneCandidates). g_coneNoCull: no culling at all.
+uint g_coneFirst;
+uint g_coneCandidates;
+bool g_coneFromTile;
+bool g_coneNoCull;
+bool g_coneCache;  // step by the cached world distance where the cone is clear
+bool g_coneIds;    // near occluders, the id field's object alone when it is certain
+
+void sdfConeSourceAll(uint objectCount) {
+    g_coneFirst = 0u;
+    g_coneCandidates = objectCount;
+    g_coneFromTile = false;
+    g_coneNoCull = false;
+    g_coneCache = false;
+    g_coneIds = false;
+}
+
+// After a sdfConeSource* call; without sdf_world_cache.glsl both stay off.
+void sdfConeUseCache(bool cache, bool ids) {
+#ifdef SDF_CACHE_SET
+    g_coneCache = cache;
+    g_coneIds = ids;
+#endif
+}
+
+void sdfConeSourceNoCull(uint objectCount) {
+    sdfConeSourceAll(objectCount);
+    g_coneNoCull = true;
+}
+
+#ifdef SDF_TILES_SET
+// range = the tile list's (first, count); count 0xffffffff: the list overflowed, every object.
+void sdfConeSourceTile(uvec2 range, uint objectCount) {
+    sdfConeSourceAll(objectCount);
+    if (range.y == 0xffffffffu) return;
+    g_coneFirst = range.x;
+    g_coneCandidates = range.y;
+    g_coneFromTile = true;
+}
+#endif
+
+uint sdfConeCandidate(uint i) {
+#ifdef SDF_TILES_SET
+    if (g_coneFromTile) return sdfTileIndices[g_coneFirst + i];
+#endif
+    return i;
+}
+
+// Fills the list of objects the cone can meet; returns false when none can. Without culling the
+// "list" is every candidate (g_coneOverflow).
 bool sdfConeCull(vec3 o, vec3 d, float tMin, float tMax, float tanHalf, float epsilon, uint objectCount) {
     g_coneCount = 0;
     g_coneOverflow = false;
-    for (uint obj = 0u; obj < objectCount; ++obj) {
+    if (g_coneNoCull) {
+        g_coneOverflow = true;
+        g_coneCount = int(g_coneCandidates);
+        return g_coneCount > 0;
+    }
+    for (uint i = 0u; i < g_coneCandidates; ++i) {
+        uint obj = sdfConeCandidate(i);
         if ((sdfObjects[obj].params.y & SDF_OBJECT_CASTS_SHADOWS) == 0u) continue;
         float reach = sdfConeUnbounded(obj) ? 0.0 : min(tMax, sdfConeFarthest(obj, o));
         vec2 iv = sdfConeInterval(obj, o, d, tanHalf * reach + epsilon);
@@ -110,7 +180,7 @@ bool sdfConeCull(vec3 o, vec3 d, float tMin, float tMax, float tanHalf, float ep
             g_coneOverflow = true;
         }
     }
-    if (g_coneOverflow) g_coneCount = int(objectCount);
+    if (g_coneOverflow) g_coneCount = int(g_coneCandidates);
     return g_coneCount > 0;
 }
 
@@ -118,23 +188,51 @@ bool sdfConeCull(vec3 o, vec3 d, float tMin, float tMax, float tanHalf, float ep
 float sdfConeDistance(vec3 p, float t, float fieldSafety) {
     float d = 3.0e38;
     for (int i = 0; i < g_coneCount; ++i) {
-        uint obj = uint(i);
+        uint obj;
         if (!g_coneOverflow) {
             if (t > g_coneInterval[i].y) continue;  // the cone has left this (grown) box for good
             obj = g_coneList[i];
-        } else if ((sdfObjects[obj].params.y & SDF_OBJECT_CASTS_SHADOWS) == 0u) {
-            continue;
+        } else {
+            obj = sdfConeCandidate(uint(i));
+            if ((sdfObjects[obj].params.y & SDF_OBJECT_CASTS_SHADOWS) == 0u) continue;
         }
         vec3 pl = sdfToLocal(obj, p);
+        // Both the box distance and the object's distance are lower bounds of the distance to the
+        // solid: the larger one counts, so skipping an object whose box is no nearer than the best so
+        // far changes nothing (culled and unculled marches see the same distances).
         float box = sdfBoxDistance(obj, pl);
-        if (box >= d) continue;  // cannot be nearer than the best so far
-        d = min(d, sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, fieldSafety));
+        if (!g_coneNoCull && box >= d) continue;
+        float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, fieldSafety);
+        d = min(d, box > 0.0 ? max(box, od) : od);  // box 0: inside the box, the object's sign counts
     }
     return d;
 }
 
-float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sinHalfAngle, uint objectCount,
-                        uint maxSteps, float fieldSafety, float epsilon) {
+// The distance the march uses at p (ray parameter t): the cached world distance when it shows the
+// cone clear (`clear` = the radius the cone needs there), the id field's object when the cell names
+// one that casts shadows, else the nearest candidate.
+float sdfConeStepDistance(vec3 p, float t, float clear, uint objectCount, float fieldSafety) {
+#ifdef SDF_CACHE_SET
+    if (g_coneCache || g_coneIds) {
+        float cached, voxel;
+        uint obj;
+        if (sdfCacheLookup(p, cached, voxel, obj)) {
+            if (g_coneCache && cached >= clear) return cached;
+            if (g_coneIds && obj < objectCount && (sdfObjects[obj].params.y & SDF_OBJECT_CASTS_SHADOWS) != 0u) {
+                vec3 pl = sdfToLocal(obj, p);
+                float box = sdfBoxDistance(obj, pl);
+                float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, fieldSafety);
+                return box > 0.0 ? max(box, od) : od;
+            }
+        }
+    }
+#endif
+    return sdfConeDistance(p, t, fieldSafety);
+}
+
+// sdfConeVisibility over the candidates of the last sdfConeSource* call.
+float sdfConeTrace(vec3 origin, vec3 dir, float tMin, float tMax, float sinHalfAngle, uint objectCount, uint maxSteps,
+                   float fieldSafety, float epsilon) {
     bool hard = sinHalfAngle <= 0.0;
     float s = clamp(sinHalfAngle, 0.0, 0.999);
     float tanHalf = s / sqrt(1.0 - s * s);
@@ -143,7 +241,8 @@ float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sin
     float t = tMin;
     float d = 3.0e38;
     for (uint step = 0u; step < maxSteps && t < tMax; ++step) {
-        d = sdfConeDistance(origin + dir * t, t, fieldSafety);
+        d = sdfConeStepDistance(origin + dir * t, t, hard ? 4.0 * epsilon : max(t * s, epsilon), objectCount,
+                                fieldSafety);
         if (hard) {
             if (d < epsilon) return 0.0;
             t += max(d, epsilon);
@@ -164,6 +263,12 @@ float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sin
     // ever smaller steps): a hard ray within a few epsilons of it is taken as blocked.
     if (hard) return t < tMax && d < 4.0 * epsilon ? 0.0 : 1.0;
     return sdfDiscVisible(xMin);
+}
+
+float sdfConeVisibility(vec3 origin, vec3 dir, float tMin, float tMax, float sinHalfAngle, uint objectCount,
+                        uint maxSteps, float fieldSafety, float epsilon) {
+    sdfConeSourceAll(objectCount);
+    return sdfConeTrace(origin, dir, tMin, tMax, sinHalfAngle, objectCount, maxSteps, fieldSafety, epsilon);
 }
 
 float sdfSurfaceBias(vec3 p, float pixelSize, uint objectCount) {

@@ -15,6 +15,10 @@
 //     starting 2 pixel footprints + that bias along the light direction (sdf_cone.glsl says why the
 //     normal offset stays small); hard rays stop at a distance below half a pixel footprint;
 //  4. the visible fraction into the layer's column block of the R8 strip.
+// Culling (issue 13): with the tile lists (flags kTileLists) the per-ray cull starts from the
+// full-resolution pixel's tile list of this layer instead of every object; kNoCull evaluates every
+// casting object at every step (acceleration.culling off). kCache / kIdField: the world cache and
+// id field in the march (sdf_cone.glsl says how; set only when the cache ran this frame).
 #version 450
 #pragma penumbra_variants SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -32,6 +36,15 @@ SCENE_LIGHTS;
 #define SDF_FIELDS_BINDING 5
 #define SDF_ATLAS_BINDING 6
 #include "sdf_scene.glsl"
+#define SDF_TILES_SET 2
+#define SDF_TILE_RANGES_BINDING 7
+#define SDF_TILE_INDICES_BINDING 8
+#include "sdf_tiles.glsl"
+#define SDF_CACHE_SET 2
+#define SDF_CACHE_DISTANCE_BINDING 9
+#define SDF_CACHE_IDS_BINDING 10
+#define SDF_CACHE_LEVELS_BINDING 11
+#include "sdf_world_cache.glsl"
 #include "sdf_cone.glsl"
 
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
@@ -42,15 +55,32 @@ layout(push_constant) uniform SdfShadow {
     uvec4 counts;  // x SDF objects (all, occluder-only included), y step limit, z layers, w flags (1 hard)
     uvec4 size;    // x, y the output's size of one layer, z, w the full-resolution frame size
     vec4 params;   // x field safety, y pixel footprint per unit of distance, z far plane
+    uvec4 tiles;   // x tilesX, y tiles per layer, z flags (kTileLists, kNoCull, kCache, kIdField)
 } shadow;
 
 const uint kHardFlag = 1u;
+const uint kTileLists = 1u;  // tiles.z: SdfTileRanges / SdfTileIndices hold this frame's lists
+const uint kNoCull = 2u;     // tiles.z: culling off
+const uint kCache = 4u;      // tiles.z: step by the world cache where the cone is clear
+const uint kIdField = 8u;    // tiles.z: near occluders, the id field's object
 
 // The index of the light drawn into `layer` (-1 when none is).
 int layerLight(uint layer) {
     for (uint i = 0u; i < scene.params.x; ++i)
         if (int(lights[i].shadow.x) == int(layer)) return int(i);
     return -1;
+}
+
+// The candidates of the per-ray cull for the full-resolution pixel `full` in `layer`.
+void coneSource(ivec2 full, uint layer) {
+    uint count = shadow.counts.x;
+    if ((shadow.tiles.z & kNoCull) != 0u)
+        sdfConeSourceNoCull(count);
+    else if ((shadow.tiles.z & kTileLists) != 0u)
+        sdfConeSourceTile(sdfTileRanges[layer * shadow.tiles.y + sdfTileIndex(full, shadow.tiles.x)], count);
+    else
+        sdfConeSourceAll(count);
+    sdfConeUseCache((shadow.tiles.z & kCache) != 0u, (shadow.tiles.z & kIdField) != 0u);
 }
 
 float visibility(Light light, vec3 p, vec3 n, float pixelSize) {
@@ -76,8 +106,8 @@ float visibility(Light light, vec3 p, vec3 n, float pixelSize) {
     float bias = sdfSurfaceBias(p, pixelSize, shadow.counts.x);
     vec3 origin = p + n * bias;
     float epsilon = max(0.5 * pixelSize, 1e-6 * max(length(p), 1.0));
-    return sdfConeVisibility(origin, l, 2.0 * pixelSize + bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
-                             epsilon);
+    return sdfConeTrace(origin, l, 2.0 * pixelSize + bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
+                        epsilon);
 }
 
 void main() {
@@ -96,5 +126,6 @@ void main() {
     vec3 p = view.position.xyz + depth * ray;
     vec3 n = octDecode(texelFetch(gbufferNormal, full, 0).rg);
     float pixelSize = shadow.params.y * depth * length(ray);
+    coneSource(full, id.z);
     imageStore(shadowImage, out_, vec4(visibility(lights[li], p, n, pixelSize)));
 }

@@ -1,0 +1,192 @@
+// The "sdf_tile_cull_effects" pass (renderer/features/sdf_effects_cull.h): sizes the lists, clears
+// the counters and fills the push constants; the tests live in
+// renderer/shaders/sdf_tile_cull_effects.comp.
+#include "renderer/features/sdf_effects_cull.h"
+
+#include <algorithm>
+
+#include <shaders/sdf_tile_cull_effects.h>
+
+#include "renderer/features/fullscreen.h"
+#include "renderer/features/sdf_scene.h"
+
+namespace penumbra::render {
+
+namespace {
+
+namespace program = shaders::sdf_tile_cull_effects;
+
+constexpr uint64_t kCounterBytes = 16;
+
+fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size) {
+    rhi::BufferDesc d;
+    d.size = std::max<uint64_t>(size, 16);
+    d.debugName = name;
+    return b.createBuffer(name, d);
+}
+
+}  // namespace
+
+uint64_t sdfEffectsListCapacity(uint64_t tiles, uint32_t lists, uint32_t objects) {
+    return std::max<uint64_t>(tiles * lists * std::min(objects, kSdfEffectsMeanList), 1);
+}
+
+void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
+    const bool ao = desc.ao.variant != scene::AoVariant::Off;
+    const uint32_t layers = desc.shadowLayers;
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const GBuffer& gbuffer = *fc.board.find<GBuffer>();
+    SdfTileLists lists;
+    lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
+    lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
+    const uint64_t tiles = uint64_t(lists.tilesX) * lists.tilesY;
+    const uint32_t listCount = layers + (ao ? 1u : 0u);
+    // Capped below 2^32 - 16: the shader's reservations stay representable.
+    const uint64_t capacity =
+        std::min<uint64_t>(sdfEffectsListCapacity(tiles, listCount, sdfScene.objectCount), 0xfffffff0u);
+    const uint64_t indexBytes = capacity * 4;
+
+    struct Clear {
+        fg::BufferRef counters;
+    };
+    const Clear& clear = fc.graph.addPass<Clear>(
+        "sdf_tile_cull_effects_clear", fg::PassKind::Transfer,
+        [&](fg::PassBuilder& b, Clear& d) {
+            d.counters =
+                b.write(storageBuffer(b, "sdf.effects_cull_counters", kCounterBytes), rhi::Access::CopyDst);
+        },
+        [](const Clear& d, fg::PassContext& ctx) {
+            ctx.cmd.fillBuffer(ctx.buffer(d.counters), 0, kCounterBytes, 0u);
+        });
+
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        fg::TextureRef depth;
+        fg::BufferRef counters, shadowRanges, aoRanges, indices;
+    };
+    const bool fields = sdfScene.atlas.isValid();
+    const rhi::ShaderDesc& cs =
+        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
+    const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
+    const program::PushConstants push{
+        glm::uvec4(sdfScene.objectCount, layers, (ao ? 1u : 0u) | (desc.shadows.hard ? 2u : 0u),
+                   uint32_t(capacity)),
+        glm::uvec4(lists.tilesX, lists.tilesY, fc.width, fc.height),
+        glm::vec4(2.0f * std::max(desc.ao.maxDistance, 0.0f), 4.0f * desc.trace.hitEpsilon, desc.footprint,
+                  desc.farPlane)};
+    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
+    const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
+    const Data& data = fc.graph.addPass<Data>(
+        "sdf_tile_cull_effects", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            b.read(d.scene.scene, rhi::Access::UniformRead);
+            b.read(d.scene.lights, rhi::Access::ShaderRead);
+            readSdfScene(b, d.sdf);
+            d.counters = b.write(clear.counters, rw);
+            d.shadowRanges =
+                b.write(storageBuffer(b, "sdf.shadow_tile_ranges", tiles * std::max(layers, 1u) * 8),
+                        rhi::Access::ShaderWrite);
+            d.aoRanges = b.write(storageBuffer(b, "sdf.ao_tile_ranges", ao ? tiles * 8 : 16),
+                                 rhi::Access::ShaderWrite);
+            d.indices =
+                b.write(storageBuffer(b, "sdf.effects_tile_indices", indexBytes), rhi::Access::ShaderWrite);
+        },
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, groupsX, groupsY](
+            const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("Scene", ctx.buffer(d.scene.scene))
+                .set("Lights", ctx.buffer(d.scene.lights))
+                .set("gbufferDepth", ctx.texture(d.depth), nearest)
+                .set("EffectsShadowRanges", ctx.buffer(d.shadowRanges))
+                .set("EffectsAoRanges", ctx.buffer(d.aoRanges))
+                .set("EffectsTileIndices", ctx.buffer(d.indices))
+                .set("EffectsCullCounters", ctx.buffer(d.counters));
+            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            ctx.cmd.dispatch(groupsX, groupsY);
+        });
+    // Kept to the end of the frame (never aliased after their last use) so tests can read them back.
+    fc.graph.markOutput(data.counters);
+    fc.graph.markOutput(data.indices);
+    SdfCullLists all = fc.board.has<SdfCullLists>() ? *fc.board.find<SdfCullLists>() : SdfCullLists{};
+    lists.indices = data.indices;
+    if (layers > 0) {
+        all.shadow = lists;
+        all.shadow.ranges = data.shadowRanges;
+        all.shadow.layers = layers;
+        all.shadow.bytes = tiles * layers * 8 + indexBytes;
+        fc.graph.markOutput(data.shadowRanges);
+    }
+    if (ao) {
+        all.ao = lists;
+        all.ao.ranges = data.aoRanges;
+        all.ao.bytes = tiles * 8 + (layers > 0 ? 0 : indexBytes);  // the indices are shared: counted once
+        fc.graph.markOutput(data.aoRanges);
+    }
+    fc.board.add(all);
+    fc.board.add(SdfEffectsCullCounters{data.counters, data.indices, indexBytes});
+}
+
+namespace {
+// This frame's stand-ins for the world cache (one pass per frame, shared by shadows and AO).
+struct EffectsCacheStandIn {
+    SdfWorldCacheView view;
+};
+}  // namespace
+
+SdfWorldCacheView sdfEffectsWorldCache(FrameContext& fc, bool& bound) {
+    bound = false;
+    if (const SdfWorldCacheView* view = fc.board.find<SdfWorldCacheView>()) {
+        bound = true;
+        return *view;
+    }
+    if (const EffectsCacheStandIn* standIn = fc.board.find<EffectsCacheStandIn>()) return standIn->view;
+    const EffectsCacheStandIn& data = fc.graph.addPass<EffectsCacheStandIn>(
+        "sdf_effects_cache_stand_in", fg::PassKind::Transfer,
+        [](fg::PassBuilder& b, EffectsCacheStandIn& d) {
+            rhi::TextureDesc tex;
+            tex.dimension = rhi::TextureDimension::Tex3D;
+            tex.format = rhi::Format::R32_FLOAT;
+            tex.debugName = "sdf_effects.cache_distance_stand_in";
+            d.view.distance = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
+            tex.format = rhi::Format::R32_UINT;
+            tex.debugName = "sdf_effects.cache_ids_stand_in";
+            d.view.ids = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
+            d.view.levels =
+                b.write(storageBuffer(b, "sdf_effects.cache_levels_stand_in", 16), rhi::Access::CopyDst);
+        },
+        [](const EffectsCacheStandIn& d, fg::PassContext& ctx) {
+            // The texels stay undefined: never read (the passes' cache flags are off).
+            ctx.cmd.fillBuffer(ctx.buffer(d.view.levels), 0, 16, 0u);
+        });
+    EffectsCacheStandIn standIn{data.view};
+    rhi::SamplerDesc nearest;
+    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
+    standIn.view.sampler = fc.cache.sampler(nearest);
+    fc.board.add(standIn);
+    return standIn.view;
+}
+
+void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists) {
+    if (!lists.valid()) return;
+    b.read(lists.ranges, rhi::Access::ShaderRead);
+    b.read(lists.indices, rhi::Access::ShaderRead);
+}
+
+void setSdfEffectsLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
+                        fg::BufferRef fallback) {
+    params.set("SdfTileRanges", ctx.buffer(lists.valid() ? lists.ranges : fallback))
+        .set("SdfTileIndices", ctx.buffer(lists.valid() ? lists.indices : fallback));
+}
+
+}  // namespace penumbra::render

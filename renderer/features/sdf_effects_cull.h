@@ -1,0 +1,60 @@
+// Feature "sdf_effects_cull": the shadow and AO tile lists (SdfCullLists::shadow and ::ao of
+// renderer/features/sdf_cull.h), after mTec 8.2.6 (shadow culling) and 8.2.8 (AO culling). The pass
+// "sdf_tile_cull_effects" (renderer/shaders/sdf_tile_cull_effects.comp describes the tests) runs
+// after the G-buffer is complete and before sdf_shadow / sdf_ao: per 8x8 tile of the full-resolution
+// frame, the casting objects whose bounding sphere meets the region a shadow ray of the tile can
+// cross (one list per shadowed light, layer = GpuLight::shadow.x) or that lie within reach of the
+// tile's AO rays. Conservative: an object any effect ray of the tile can see is in the list; the
+// passes then narrow it per ray or pixel as before (sdf_cone.glsl sdfConeCull, sdf_ao.comp).
+//
+// Storage without a fixed per-tile cap: each list reserves its exact length with an atomic counter.
+// The indices buffer holds sdfEffectsListCapacity entries: every tile x list x object when that is
+// at most kSdfEffectsMeanList objects (the exact worst case: small scenes never run out), else a
+// mean of kSdfEffectsMeanList entries per list. The CPU cannot bound these lists tightly (a shadow
+// list depends on the depth buffer and on lights that reach across the screen), so the bound is a
+// memory budget that grows with the frame and the light count; a list reserved past it is written
+// as "all objects" (count 0xffffffff) and its pixels take the unculled path (correct, slower).
+#pragma once
+
+#include <cstdint>
+
+#include "renderer/core/shader_params.h"
+#include "renderer/features/effects.h"
+#include "renderer/features/sdf_cull.h"
+#include "renderer/features/sdf_world_cache.h"
+
+namespace penumbra::render {
+
+inline constexpr uint32_t kSdfEffectsMeanList = 32;
+
+// Entries of the indices buffer for `tiles` tiles, `lists` lists per tile and `objects` objects.
+uint64_t sdfEffectsListCapacity(uint64_t tiles, uint32_t lists, uint32_t objects);
+
+// The pass's counters (4 x uint32, kept to the end of the frame for SceneRenderer::readBuffer
+// "sdf.effects_cull_counters"): slots reserved, lists over capacity, sum of list lengths, lists of
+// tiles with a surface (mean list length = [2] / [3]).
+struct SdfEffectsCullCounters {
+    fg::BufferRef buffer;
+    fg::BufferRef indices;    // the shadow and AO lists' shared indices ("sdf.effects_tile_indices")
+    uint64_t indexBytes = 0;  // its size (capacity x 4)
+};
+
+// Adds the passes (a transfer clear of the counters, then the compute pass) and publishes
+// SdfCullLists::shadow (desc.shadowLayers > 0) and ::ao (AO on), keeping ::primary, and
+// SdfEffectsCullCounters. Reads
+// SceneBuffers (view, scene constants, lights), SdfSceneBuffers and GBuffer::depth.
+void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc);
+
+// The world cache as sdf_shadow / sdf_ao bind it (renderer/shaders/sdf_world_cache.glsl): the
+// frame's SdfWorldCacheView when the cache ran (`bound` true), else 1x1x1 stand-ins made once per
+// frame by a small transfer pass, which the shaders never sample (their cache flags stay off).
+SdfWorldCacheView sdfEffectsWorldCache(FrameContext& fc, bool& bound);
+
+// What sdf_shadow / sdf_ao declare and bind for one set of lists ("SdfTileRanges",
+// "SdfTileIndices" of sdf_tiles.glsl). Invalid lists bind `fallback` to both names (the shader's
+// flags say not to read them; every declared binding must be set).
+void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists);
+void setSdfEffectsLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
+                        fg::BufferRef fallback);
+
+}  // namespace penumbra::render

@@ -1,0 +1,246 @@
+// sdf_tile_cull_effects: the shadow and AO tile lists (renderer/features/sdf_effects_cull.h; read
+// through sdf_tiles.glsl by sdf_shadow.comp and sdf_ao.comp). After mTec 8.2.6 / 8.2.8 (reference
+// 000). One workgroup of 8x8 invocations per 8x8 pixel tile of the full-resolution frame:
+//  1. the tile's surface: min / max linear depth of its pixels with depth > 0 (background pixels
+//     trace no shadow or AO ray); no surface -> every list of the tile is empty. The bounding
+//     sphere of the frustum slab between those depths (the 8 points of the rays through the
+//     tile's outer pixel corners at min and max depth: every pixel-centre point lies in their
+//     hull), grown by how far a ray's start can leave the surface (the shadows' sdfSurfaceBias:
+//     a quarter pixel footprint, 1.5 voxels of a field; AO also 4 hit epsilons and 2e-5 |p|);
+//  2. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
+//     world bounding sphere (its local box through `model`, Frobenius norm; unbounded objects are
+//     always kept) against the region the effect's rays can reach from the tile's sphere:
+//       shadow, directional: the capsule from the tile sphere along the light direction up to the
+//         far plane (the march's tMax); point / sphere light: the capsule from the tile sphere to
+//         the light's position (its rays end on the light's sphere). The object's sphere is grown
+//         by what sdfConeCull grows its box by (tan(half-angle) * reach + epsilon, at most the
+//         light radius + epsilon for sphere lights), mapped through the local box growth
+//         (grow / sigma_min, times the Frobenius norm). A tile entirely beyond a light's range
+//         gets an empty list (those pixels trace nothing).
+//       AO: the object's sphere within 2 maxDistance of the tile's sphere. Every AO variant only
+//         reads objects closer than maxDistance to a point at most maxDistance from the ray start
+//         (five-tap / multi-ray taps count d < t <= maxDistance, cones d < t tan 25 deg, exact
+//         rays end once d > maxDistance - t), so the list holds every object that can change AO;
+//  3. no fixed cap: each list counts its objects, reserves that many slots with an atomicAdd on
+//     the frame's counter, then writes them in ascending order. A reservation past the capacity
+//     the CPU sized (sdf_effects_cull.cpp says how) writes (0, 0xffffffff) = "all objects": its
+//     consumer takes the unculled path. counters: 0 slots reserved, 1 lists over capacity,
+//     2 sum of list lengths, 3 lists of tiles with a surface (tests read them back).
+// Loops per invocation: objects / 64 for the voxel bound, 2 x objects per list.
+#version 450
+#pragma penumbra_variants SDF_FIELDS
+layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+
+#include "scene.glsl"
+
+SCENE_CONSTANTS;
+SCENE_LIGHTS;
+
+#define SDF_SCENE_SET 2
+#define SDF_OBJECTS_BINDING 4
+#define SHAPE_RECORDS_BINDING 5
+#define SDF_FIELDS_BINDING 6
+#define SDF_ATLAS_BINDING 7
+#include "sdf_scene.glsl"
+
+layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
+layout(set = 2, binding = 1, std430) writeonly buffer EffectsShadowRanges { uvec2 shadowRanges[]; };
+layout(set = 2, binding = 2, std430) writeonly buffer EffectsAoRanges { uvec2 aoRanges[]; };
+layout(set = 2, binding = 3, std430) writeonly buffer EffectsTileIndices { uint tileIndices[]; };
+layout(set = 2, binding = 8, std430) buffer EffectsCullCounters { uint counters[]; };
+
+layout(push_constant) uniform SdfTileCullEffects {
+    uvec4 counts;  // x objects, y shadow layers, z flags (1 AO list, 2 hard shadows), w capacity
+    uvec4 tiles;   // x tilesX, y tilesY
+    vec4 params;   // x AO reach (2 maxDistance), y AO start (hit epsilons, 4 x), z footprint, w far
+} cull;
+
+const uint kAoFlag = 1u;
+const uint kHardFlag = 2u;
+const uint kAllObjects = 0xffffffffu;
+const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
+
+shared uint s_minDepth, s_maxDepth, s_maxVoxel;
+
+// The tile's surface: sphere (xyz centre, w radius) and the largest pixel footprint on it.
+vec4 g_tile;
+float g_pixelSize;
+
+bool unboundedObject(uint obj) {
+    return any(greaterThanEqual(abs(sdfObjects[obj].boundsMin.xyz), vec3(0.5e30))) ||
+           any(greaterThanEqual(abs(sdfObjects[obj].boundsMax.xyz), vec3(0.5e30)));
+}
+
+// World bounding sphere of the object's local box (as sdf_cone.glsl's sdfConeFarthest), and the
+// Frobenius norm of its model (bounds the largest singular value) in `frob`.
+vec4 objectSphere(uint obj, out float frob) {
+    mat4 m = sdfObjects[obj].model;
+    vec3 lc = 0.5 * (sdfObjects[obj].boundsMin.xyz + sdfObjects[obj].boundsMax.xyz);
+    vec3 lh = 0.5 * (sdfObjects[obj].boundsMax.xyz - sdfObjects[obj].boundsMin.xyz);
+    frob = sqrt(dot(m[0].xyz, m[0].xyz) + dot(m[1].xyz, m[1].xyz) + dot(m[2].xyz, m[2].xyz));
+    return vec4((m * vec4(lc, 1.0)).xyz, length(lh) * frob);
+}
+
+float segmentDistance(vec3 p, vec3 a, vec3 b) {
+    vec3 ab = b - a;
+    float len2 = dot(ab, ab);
+    float t = len2 > 0.0 ? clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+    return length(p - (a + t * ab));
+}
+
+void tileSphere(uvec2 tile, float dmin, float dmax) {
+    vec2 lo = vec2(tile * 8u), hi = min(vec2((tile + 1u) * 8u), view.viewport.xy);
+    vec3 pts[8];
+    float rayLen = 0.0;
+    for (int i = 0; i < 4; ++i) {
+        vec2 corner = vec2((i & 1) != 0 ? hi.x : lo.x, (i & 2) != 0 ? hi.y : lo.y);
+        vec2 ndc = corner * view.viewport.zw * 2.0 - 1.0;
+        vec3 ray = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
+        rayLen = max(rayLen, length(ray));
+        pts[i] = view.position.xyz + dmin * ray;
+        pts[i + 4] = view.position.xyz + dmax * ray;
+    }
+    vec3 c = vec3(0.0);
+    for (int i = 0; i < 8; ++i) c += pts[i];
+    c *= 0.125;
+    float r = 0.0;
+    for (int i = 0; i < 8; ++i) r = max(r, length(pts[i] - c));
+    g_tile = vec4(c, r * 1.0001 + 1e-6 * length(c));  // float rounding of the corners
+    g_pixelSize = cull.params.z * dmax * rayLen;
+}
+
+// Light of a shadow layer (-1: none draws into it).
+int layerLight(uint layer) {
+    for (uint i = 0u; i < scene.params.x; ++i)
+        if (int(lights[i].shadow.x) == int(layer)) return int(i);
+    return -1;
+}
+
+// The reach region of one list: the capsule [a, b] around which an object's sphere must come
+// within `radius` + its own grown radius; `tanHalf` / `growMax` / `epsilon` give the cone growth.
+struct Region {
+    vec3 a, b;
+    float radius;   // the tile sphere, grown by the rays' start offset
+    float tanHalf;  // directional: the cone's tan(half-angle); growth tanHalf * reach
+    float growMax;  // point / sphere: the growth bound (light radius); < 0 for directional
+    float epsilon;  // the cone's smallest width (sdf_shadow.comp: half a pixel footprint)
+    float tMax;
+    bool empty;
+};
+
+Region shadowRegion(uint layer, float bias) {
+    Region g;
+    g.empty = true;
+    int li = layerLight(layer);
+    if (li < 0) return g;
+    Light light = lights[li];
+    vec3 c = g_tile.xyz;
+    g.radius = g_tile.w + bias;
+    g.epsilon = max(0.5 * g_pixelSize, 1e-6 * max(length(c) + g.radius, 1.0));
+    bool hard = (cull.counts.z & kHardFlag) != 0u;
+    g.a = c;
+    if (light.positionType.w < 0.5) {
+        float s = hard ? 0.0 : clamp(sin(light.shadow.y), 0.0, 0.999);
+        g.tanHalf = s / sqrt(1.0 - s * s);
+        g.tMax = cull.params.w;
+        g.b = c - light.directionRange.xyz * g.tMax;
+        g.growMax = -1.0;
+    } else {
+        vec3 lp = light.positionType.xyz;
+        float range = light.directionRange.w;
+        if (range > 0.0 && length(lp - c) - g.radius >= range) return g;  // adds nothing anywhere
+        g.b = lp;
+        g.tanHalf = 0.0;
+        // tan(asin(rho / d)) * (d - rho) = rho sqrt((d - rho) / (d + rho)) <= rho
+        g.growMax = (light.positionType.w > 1.5 && !hard) ? max(light.radianceRadius.w, 0.0) : 0.0;
+        g.tMax = 3.0e38;
+    }
+    g.empty = false;
+    return g;
+}
+
+bool inShadowList(uint obj, Region g) {
+    if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) return false;
+    if (unboundedObject(obj)) return true;
+    float frob;
+    vec4 s = objectSphere(obj, frob);
+    float grow = g.growMax >= 0.0 ? g.growMax
+                                  : g.tanHalf * min(g.tMax, length(s.xyz - g.a) + g.radius + s.w);
+    grow += g.epsilon;
+    // sdfConeInterval grows the local box by grow / sigma_min on every axis: its world sphere.
+    float sigma = max(sdfObjects[obj].boundsMin.w, 1e-30);
+    float grown = s.w + 1.7320508 * grow * frob / sigma;
+    return segmentDistance(s.xyz, g.a, g.b) <= (g.radius + grown) * 1.0001;
+}
+
+bool inAoList(uint obj, float reach) {
+    if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) return false;
+    if (unboundedObject(obj)) return true;
+    float frob;
+    vec4 s = objectSphere(obj, frob);
+    return length(s.xyz - g_tile.xyz) <= (reach + s.w) * 1.0001;
+}
+
+// Counts, reserves and writes one list; returns its range.
+uvec2 buildList(bool ao, Region g, float aoReach) {
+    uint n = 0u;
+    for (uint obj = 0u; obj < cull.counts.x; ++obj)
+        if (ao ? inAoList(obj, aoReach) : inShadowList(obj, g)) ++n;
+    atomicAdd(counters[2], n);
+    atomicAdd(counters[3], 1u);
+    uint first = atomicAdd(counters[0], n);
+    if (first > cull.counts.w || n > cull.counts.w - first) {
+        atomicAdd(counters[1], 1u);
+        return uvec2(0u, kAllObjects);
+    }
+    uint k = first;
+    for (uint obj = 0u; obj < cull.counts.x; ++obj)
+        if (ao ? inAoList(obj, aoReach) : inShadowList(obj, g)) tileIndices[k++] = obj;
+    return uvec2(first, n);
+}
+
+void main() {
+    uvec2 tile = gl_WorkGroupID.xy;
+    uint lid = gl_LocalInvocationIndex;
+    if (lid == 0u) {
+        s_minDepth = floatBitsToUint(3.0e38);
+        s_maxDepth = 0u;
+        s_maxVoxel = 0u;
+    }
+    barrier();
+    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+    if (all(lessThan(pixel, ivec2(view.viewport.xy)))) {
+        float depth = texelFetch(gbufferDepth, pixel, 0).r;
+        if (depth > 0.0) {  // positive floats order as their bits
+            atomicMin(s_minDepth, floatBitsToUint(depth));
+            atomicMax(s_maxDepth, floatBitsToUint(depth));
+        }
+    }
+    for (uint obj = lid; obj < cull.counts.x; obj += 64u) {
+        float v = sdfObjectVoxel(obj);
+        if (v > 0.0) atomicMax(s_maxVoxel, floatBitsToUint(v));
+    }
+    barrier();
+
+    uint tileIndex = tile.y * cull.tiles.x + tile.x;
+    uint tiles = cull.tiles.x * cull.tiles.y;
+    uint layers = cull.counts.y;
+    uint lists = layers + ((cull.counts.z & kAoFlag) != 0u ? 1u : 0u);
+    bool surface = s_maxDepth != 0u;
+    if (surface) tileSphere(tile, uintBitsToFloat(s_minDepth), uintBitsToFloat(s_maxDepth));
+    // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the nearest field.
+    float bias = max(0.25 * g_pixelSize, 1.5 * uintBitsToFloat(s_maxVoxel));
+    float aoStart = max(max(cull.params.y * g_pixelSize, bias), 2e-5 * max(1.0, length(g_tile.xyz) + g_tile.w));
+    for (uint job = lid; job < lists; job += 64u) {
+        bool ao = job == layers;
+        Region g;
+        g.empty = !surface;
+        if (surface && !ao) g = shadowRegion(job, bias);
+        uvec2 range = uvec2(0u);
+        if (!g.empty) range = buildList(ao, g, g_tile.w + aoStart + cull.params.x);
+        if (ao)
+            aoRanges[tileIndex] = range;
+        else
+            shadowRanges[job * tiles + tileIndex] = range;
+    }
+}
