@@ -10,8 +10,10 @@
 //      fresh renderer (which uploads everything) makes of the same world; adding and removing
 //      objects re-uploads what shifted, with the same image check;
 //   3. scale: 1000 instances of three shape programs (a golden per backend and Vulkan-vs-OpenGL
-//      parity; every instance seen in the ids) and 1000 distinct programs (1000 different records:
-//      no fixed limit; sampled objects are where they should be).
+//      parity; every instance seen in the ids; 100 of them moving: a 100-entry delta, same image as
+//      a fresh renderer) and 1000 distinct programs (1000 different records: no fixed limit;
+//      sampled objects are where they should be). DeltaAndFullUploadCost prints what the delta and
+//      the full upload cost (the threshold between them, renderer/features/sdf_scene.h).
 // Every criterion states its metric and threshold next to it; measured numbers are printed.
 #include <algorithm>
 #include <cmath>
@@ -596,6 +598,34 @@ TEST(SdfInstancingParity, ThousandInstancesVulkanMatchesOpenGL) {
         writePng(dir + "/instancing_1000.diff.png", d.diffImage);
     }
     EXPECT_TRUE(d.pass) << d.summary();
+}
+
+// At scale: 100 of 1000 instances move in one frame; the delta carries exactly them and the image
+// is the one a fresh renderer makes.
+TEST_P(SdfInstancing, HundredOfThousandInstancesMove) {
+    Scene s({0, 0, 0}, {0, 0, -1});
+    buildThousandInstances(s);
+    SceneRenderer r(dev());
+    FrameDesc d = s.frame(kGoldenW, kGoldenH);
+    d.settings.acceleration.worldCache = false;  // as in deltaFrame: the upload alone is under test
+    d.settings.acceleration.idField = false;
+    ImageRGBA8 image;
+    ASSERT_TRUE(renderImage(s, r, d, image));
+    uint32_t moved = 0;
+    for (auto [e, sr, t] : s.world.view<ecs::SdfRenderer, ecs::Transform>())
+        if (e.index % 10 == 0) {
+            t.position.y += 0.07f;
+            ++moved;
+        }
+    ASSERT_TRUE(renderImage(s, r, d, image));
+    const render::SdfUploadReport& up = r.lastFrameStats().sdfUpload;
+    std::printf("  %u of 1000 moved: %u uploaded, delta %llu B\n", moved, up.objectsUploaded,
+                (unsigned long long)up.deltaBytes);
+    // Metric: records sent and delta bytes. Threshold: exactly the moved ones, 272 bytes each.
+    EXPECT_EQ(up.objectsUploaded, moved);
+    EXPECT_EQ(up.deltaBytes, uint64_t(moved) * 272u);
+    EXPECT_TRUE(ranPass(r, "sdf_object_scatter"));
+    expectSameAsFresh(dev(), s, d, image, "100 of 1000 moved");
 }
 
 // 1000 spheres of 1000 different radii: 1000 programs, so 1000 distinct record sets.
