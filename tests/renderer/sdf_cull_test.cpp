@@ -26,6 +26,7 @@
 #include "engine/assets/asset_manager.h"
 #include "engine/ecs/components.h"
 #include "engine/ecs/world.h"
+#include "engine/engine.h"
 #include "engine/scene/scene.h"
 #include "engine/sdf/shape_program.h"
 #include "renderer/features/sdf_cull.h"
@@ -136,10 +137,11 @@ struct CpuObject {
     uint32_t entity = 0;
 };
 
-std::vector<CpuObject> cpuObjects(const CullScene& s) {
+std::vector<CpuObject> cpuObjects(const ecs::World& world, const assets::AssetManager& assets) {
     std::vector<CpuObject> out;
-    for (auto [e, sr, t] : s.world.view<ecs::SdfRenderer, ecs::Transform>()) {
-        const sdf::ShapeProgram* p = s.assets.shapeProgram(sr.sdf);
+    for (auto [e, sr, t] : world.view<ecs::SdfRenderer, ecs::Transform>()) {
+        const sdf::ShapeProgram* p = assets.shapeProgram(sr.sdf);
+        if (!sr.visible || sr.occluderOnly || !p) continue;  // the scenes here trace shape programs only
         CpuObject o;
         o.inv = glm::inverse(glm::dmat4(t.worldMatrix));
         o.entity = e.index;
@@ -201,8 +203,14 @@ class SdfCull : public GpuTest {
 protected:
     std::string backend() const { return GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl"; }
     // Test 1 on the 40-object scene moved by `offset`, seen from `eye`.
-    // Test 1 on scene `s` of `count` objects; `minHitFraction` of the pixels must hit an object.
-    void checkLists(CullScene& s, size_t count, double minHitFraction);
+    // Test 1 on a world of `count` objects rendered with `frame` (kW x kH, culling on);
+    // `minHitFraction` of the pixels must hit an object.
+    void checkLists(const ecs::World& world, const assets::AssetManager& assets, const FrameDesc& frame,
+                    size_t count, double minHitFraction);
+    void checkLists(CullScene& s, size_t count, double minHitFraction) {
+        ecs::updateTransforms(s.world);
+        checkLists(s.world, s.assets, s.frame(), count, minHitFraction);
+    }
 };
 
 // ---- 1. conservativeness ---------------------------------------------------------------------------
@@ -236,11 +244,32 @@ TEST_P(SdfCull, DenseClusterListsStayConservative) {
     checkLists(s, 2500, 0.003);  // the cluster covers about 7 x 7 pixels
 }
 
-void SdfCull::checkLists(CullScene& s, size_t count, double minHitFraction) {
+// The scene file scenes/shapes.json (CSG, a repeat, a plane; its own camera).
+TEST_P(SdfCull, ShapesSceneListsAreConservative) {
+    EngineDesc desc;
+    desc.loadStaticPlugins = false;
+    std::string error;
+    std::unique_ptr<Engine> engine = Engine::create(desc, error);
+    ASSERT_TRUE(engine && engine->loadScene(PENUMBRA_SOURCE_DIR "/scenes/shapes.json", error)) << error;
+    engine->update(0.0);
+    FrameDesc frame;
+    frame.width = kW;
+    frame.height = kH;
+    frame.settings = engine->settings();
+    frame.settings.acceleration.culling = true;
+    frame.camera = scene::findCamera(engine->world(), engine->settings().camera);
+    frame.aux = true;
+    size_t count = 0;
+    for (auto [e, sr] : engine->world().view<ecs::SdfRenderer>()) count += sr.visible && !sr.occluderOnly;
+    checkLists(engine->world(), engine->assets(), frame, count, 0.5);
+}
+
+void SdfCull::checkLists(const ecs::World& world, const assets::AssetManager& assets, const FrameDesc& frame,
+                         size_t count, double minHitFraction) {
     SceneRenderer r(dev());
     std::string error;
-    ASSERT_TRUE(s.render(r, s.frame(), error)) << error;
-    const std::vector<CpuObject> objects = cpuObjects(s);
+    ASSERT_TRUE(r.render(world, assets, frame, error)) << error;
+    const std::vector<CpuObject> objects = cpuObjects(world, assets);
     ASSERT_EQ(objects.size(), count);
     const Lists l = readLists(r);
     ASSERT_FALSE(l.ranges.empty());
@@ -279,7 +308,7 @@ void SdfCull::checkLists(CullScene& s, size_t count, double minHitFraction) {
     }
 
     // Every pixel ray's boxes are in its tile's list.
-    const RefCamera cam(s.world, s.camera, kW, kH);
+    const RefCamera cam(world, frame.camera, kW, kH);
     uint64_t missing = 0, met = 0;
     std::vector<std::vector<bool>> needed(l.ranges.size(), std::vector<bool>(objects.size(), false));
     for (uint32_t y = 0; y < kH; ++y)
