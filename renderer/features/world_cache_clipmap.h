@@ -27,9 +27,9 @@
 // cells disagree" rule: the nearest object's true distance gains at most sqrt(3)/2 h + s and every
 // other's loses at most as much anywhere in the cell, so the named object is the nearest
 // everywhere in it. U_1 (sdf_world_cache_update.comp): exact shape programs (shapes, unions,
-// transforms) under any scale (sigma_max / sigma_min times the value outside), fields inside their
-// box of voxel centres (interpolant + interpolation bound); smooth or subtractive CSG, repetition
-// and fields outside their box have none (their cells stay UNCERTAIN).
+// transforms) under any scale (sigma_max / sigma_min times the value outside); smooth or
+// subtractive CSG, repetition and fields have none (their cells stay UNCERTAIN: a field's
+// interpolated surface, the one the trace hits, may lie nearer than its mesh's).
 //
 // Changes: per object (keyed by entity index) the world box corners at its last cache update are
 // kept. It moved when a corner moved more than s / 2 since then: two values computed at states

@@ -3,8 +3,8 @@
 // workgroup per job (a box of at most 8^3 voxels of one level), one invocation per voxel:
 //   recompute: D = min(T, d_1) - margin over the job's objects (every object within T + slack of
 //              the box), id = the nearest when d_2 - U >= sqrt(3) h + 2 slack, U an upper bound of
-//              its true distance at c (upperDistance: exact programs under any scale, fields inside
-//              their voxel box), UNCERTAIN otherwise, NONE when d_1 >= T;
+//              its true distance at c (upperDistance: exact programs under any scale; none for
+//              fields and inexact programs), UNCERTAIN otherwise, NONE when d_1 >= T;
 //   splat:     D = min(D, d_1 - margin) over the job's (changed) objects, id = UNCERTAIN unless it
 //              was NONE and stays so (no listed object within T).
 // Distances are sdfObjectDistance(o, c, 1) at the voxel centre c (sdf_scene.glsl), raised outside
@@ -47,10 +47,9 @@ const uint kExactProgram = 1u;  // CacheObjectFlags: the shape program's value i
 
 // An upper bound of the object's true signed world distance at c, given its value d there (the
 // lower bound sdfObjectDistance); 3e38 when none is known. Exact programs (flag): the local value
-// d / sigma_min is the true local distance. Fields, inside their box of voxel centres: the
-// interpolant plus its interpolation bound (sdf_field.glsl: |trilinear - f| <= bound + 2^-10
-// relative). World from local: outside (> 0) at most sigma_max times, inside at most sigma_min
-// times (a negative value), sigma_max^2 <= the largest Gershgorin row sum of M^T M.
+// d / sigma_min is the true local distance. World from local: outside (> 0) at most sigma_max
+// times, inside at most sigma_min times (a negative value), sigma_max^2 <= the largest Gershgorin
+// row sum of M^T M.
 float upperDistance(uint o, vec3 c, float d) {
     const mat3 m = mat3(sdfObjects[o].model);
     const mat3 g = transpose(m) * m;
@@ -63,16 +62,12 @@ float upperDistance(uint o, vec3 c, float d) {
         if ((cacheObjectFlags[o] & kExactProgram) == 0u) return 3.0e38;
         local = d / sigmaMin;
     } else {
-#ifdef SDF_FIELDS
-        const uint slot = sdfObjects[o].info.y;
-        const vec3 pl = sdfToLocal(o, c);
-        const vec3 x = sdfFieldVoxelCoord(sdfFields[slot], pl);
-        if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, sdfFields[slot].dims.xyz - 1.0))) return 3.0e38;
-        local = sdfFieldDistance(slot, pl) + sdfFieldInterpolationBound(slot, pl);
-        local += 2.0e-3 * abs(local) + 1.0e-3 * sdfFields[slot].origin.w;  // storage rounding
-#else
+        // Fields: an upper bound of the mesh distance is known inside the voxel box (interpolant +
+        // interpolation bound), but the trace's surface is the interpolant's zero set, which may
+        // lie up to that bound nearer than the mesh: naming a field let the trace step past
+        // another field's interpolated surface (AccelParity.Meshes: 22 px of other entities).
+        // Cells nearest to a field stay UNCERTAIN.
         return 3.0e38;
-#endif
     }
     const float world = local > 0.0 ? local * sigmaMax : local * sigmaMin;
     return world + 1.0e-5 * max(1.0, length(c)) + 1.0e-6 * abs(world);  // float evaluation
