@@ -12,9 +12,9 @@
 //   cones      9 cones of half-angle 25 deg, each 1/9 of the cosine weight, visibility = min of
 //              d / (t tan 25 deg) along the axis (Wright); bent normal = visibility-weighted axes
 // Occluders: every object with kSdfObjectCastsShadows (occluder-only mesh fields included) whose
-// bounds box is within 2 maxDistance + the start offset of the point (farther objects cannot change
-// any variant's result); the candidates come from the pixel's AO tile list (SdfCullLists::ao) with
-// acceleration.culling, every object otherwise (no box test at all when culling is off). With the
+// bounds box is within maxDistance of the point (the influence radius); the candidates come from the
+// pixel's AO tile list (SdfCullLists::ao) with acceleration.culling, every object otherwise (culling
+// off: every casting object evaluated at every step, those beyond the radius then ignored). With the
 // world cache a cached distance >= maxDistance is used without evaluating objects, with the id field
 // the cell's certain object alone. AO = 1 - strength * occlusion.
 //

@@ -75,8 +75,7 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
         glm::uvec4(sdfScene.objectCount, layers, (ao ? 1u : 0u) | (desc.shadows.hard ? 2u : 0u),
                    uint32_t(capacity)),
         glm::uvec4(lists.tilesX, lists.tilesY, fc.width, fc.height),
-        glm::vec4(2.0f * std::max(desc.ao.maxDistance, 0.0f), 4.0f * desc.trace.hitEpsilon, desc.footprint,
-                  desc.farPlane)};
+        glm::vec4(std::max(desc.ao.maxDistance, 0.0f), 0.0f, desc.footprint, desc.farPlane)};
     const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
     const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
     const Data& data = fc.graph.addPass<Data>(

@@ -3,15 +3,13 @@
 // the frame's size):
 //  1. the full-resolution pixel containing the AO pixel's centre (effectsFullPixel) gives depth and
 //     normal; background pixels write AO 1 and the zero normal;
-//  2. culling: objects that take part in AO (kSdfObjectCastsShadows) whose bounds box lies within
-//     2 maxDistance + the start offset of the point, up to kListSize of them (more: every candidate
-//     is evaluated). Every variant reads only distances below maxDistance at points at most
-//     maxDistance + offset from the point (five-tap and multi-ray taps count d < t, cones
-//     d < t tan 25 deg and step past maxDistance once d >= maxDistance - t, exact rays end there),
-//     so an object farther than that changes nothing: culled and unculled AO agree. The
-//     candidates are the full-resolution pixel's AO tile list when the frame built one (flag
-//     kTileLists, renderer/features/sdf_effects_cull.h), else every object; kNoCull (acceleration
-//     culling off) evaluates every casting object at every step without box tests;
+//  2. occluders: objects that take part in AO (kSdfObjectCastsShadows) whose bounds box lies within
+//     maxDistance of the point (the AO's influence radius: an object beyond it does not occlude,
+//     tests/renderer/sdf_ao_test.cpp), up to kListSize of them in a per-pixel list (more: every
+//     candidate is evaluated). The candidates are the full-resolution pixel's AO tile list when the
+//     frame built one (flag kTileLists, renderer/features/sdf_effects_cull.h), else every object.
+//     kNoCull (acceleration culling off): every casting object is evaluated at every step and the
+//     ones beyond the influence radius are then ignored (same result, no work saved);
 //  3. the variant (default five-tap, MULTI_RAY, CONES) computes the occlusion in [0, 1] and a bent
 //     normal; the result is AO = 1 - strength * occlusion.
 // Rays and taps start `offset` above the surface along the normal (a few pixel footprints: the
@@ -74,9 +72,15 @@ bool g_noCull;
 
 uint candidate(uint i) { return g_fromTile ? sdfTileIndices[g_first + i] : i; }
 
-// Collects the occluders within `reach` of p (their bounds box distance, a lower bound) among the
-// candidates of the full-resolution pixel.
-void cullObjects(vec3 p, ivec2 pixel, float reach) {
+vec3 g_surface;  // the pixel's surface point: occluders count only within maxDistance of it
+
+// Whether the object is within the influence radius (maxDistance) of the surface point.
+bool influences(uint obj) { return sdfBoxDistance(obj, sdfToLocal(obj, g_surface)) <= ao.params.x; }
+
+// Collects the occluders within maxDistance of p (their bounds box distance, a lower bound) among
+// the candidates of the full-resolution pixel.
+void cullObjects(vec3 p, ivec2 pixel) {
+    g_surface = p;
     g_count = 0;
     g_overflow = false;
     g_first = 0u;
@@ -98,7 +102,7 @@ void cullObjects(vec3 p, ivec2 pixel, float reach) {
     for (uint i = 0u; i < g_candidates; ++i) {
         uint obj = candidate(i);
         if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) continue;
-        if (sdfBoxDistance(obj, sdfToLocal(obj, p)) > reach) continue;
+        if (!influences(obj)) continue;
         if (g_count == kListSize) {
             g_overflow = true;
             return;
@@ -118,7 +122,8 @@ float sceneDistance(vec3 p) {
         uint obj;
         if (sdfCacheLookup(p, cached, voxel, obj)) {
             if ((ao.tiles.z & kCache) != 0u && cached >= ao.params.x) return cached;
-            if ((ao.tiles.z & kIdField) != 0u && obj < ao.counts.x && (sdfObjects[obj].params.y & kCastsShadows) != 0u) {
+            if ((ao.tiles.z & kIdField) != 0u && obj < ao.counts.x &&
+                (sdfObjects[obj].params.y & kCastsShadows) != 0u && influences(obj)) {
                 vec3 pl = sdfToLocal(obj, p);
                 float box = sdfBoxDistance(obj, pl);
                 float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, ao.params.z);
@@ -137,6 +142,7 @@ float sceneDistance(vec3 p) {
         float box = sdfBoxDistance(obj, pl);
         if (!g_noCull && box >= d) continue;
         float od = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, ao.params.z);
+        if (g_noCull && !influences(obj)) continue;  // evaluated (no optimisation), then ignored
         d = min(d, box > 0.0 ? max(box, od) : od);  // box 0: inside the box, the object's sign counts
     }
     return d;
@@ -262,7 +268,7 @@ void main() {
     float offset = max(max(4.0 * ao.eps.x * footprint, sdfSurfaceBias(p, footprint, ao.counts.x)),
                        2e-5 * max(1.0, length(p)));
     vec3 o = p + n * offset;
-    cullObjects(p, pixel, 2.0 * ao.params.x + offset);
+    cullObjects(p, pixel);
 
     vec4 result;  // x occlusion, yzw bent normal (unnormalised)
 #if defined(MULTI_RAY)

@@ -6,7 +6,7 @@
 //     sphere of the frustum slab between those depths (the 8 points of the rays through the
 //     tile's outer pixel corners at min and max depth: every pixel-centre point lies in their
 //     hull), grown by how far a ray's start can leave the surface (the shadows' sdfSurfaceBias:
-//     a quarter pixel footprint, 1.5 voxels of a field; AO also 4 hit epsilons and 2e-5 |p|);
+//     a quarter pixel footprint, 1.5 voxels of a field);
 //  2. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
 //     world bounding sphere (its local box through `model`, Frobenius norm; unbounded objects are
 //     always kept) against the region the effect's rays can reach from the tile's sphere:
@@ -17,10 +17,8 @@
 //         light radius + epsilon for sphere lights), mapped through the local box growth
 //         (grow / sigma_min, times the Frobenius norm). A tile entirely beyond a light's range
 //         gets an empty list (those pixels trace nothing).
-//       AO: the object's sphere within 2 maxDistance of the tile's sphere. Every AO variant only
-//         reads objects closer than maxDistance to a point at most maxDistance from the ray start
-//         (five-tap / multi-ray taps count d < t <= maxDistance, cones d < t tan 25 deg, exact
-//         rays end once d > maxDistance - t), so the list holds every object that can change AO;
+//       AO: the object's sphere within maxDistance of the tile's sphere: sdf_ao.comp counts an
+//         occluder only when its box is within maxDistance of the pixel's surface point;
 //  3. no fixed cap: each list counts its objects, reserves that many slots with an atomicAdd on
 //     the frame's counter, then writes them in ascending order. A reservation past the capacity
 //     the CPU sized (sdf_effects_cull.cpp says how) writes (0, 0xffffffff) = "all objects": its
@@ -52,7 +50,7 @@ layout(set = 2, binding = 8, std430) buffer EffectsCullCounters { uint counters[
 layout(push_constant) uniform SdfTileCullEffects {
     uvec4 counts;  // x objects, y shadow layers, z flags (1 AO list, 2 hard shadows), w capacity
     uvec4 tiles;   // x tilesX, y tilesY
-    vec4 params;   // x AO reach (2 maxDistance), y AO start (hit epsilons, 4 x), z footprint, w far
+    vec4 params;   // x AO reach (maxDistance), y unused, z pixel footprint per unit distance, w far
 } cull;
 
 const uint kAoFlag = 1u;
@@ -230,14 +228,13 @@ void main() {
     if (surface) tileSphere(tile, uintBitsToFloat(s_minDepth), uintBitsToFloat(s_maxDepth));
     // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the nearest field.
     float bias = max(0.25 * g_pixelSize, 1.5 * uintBitsToFloat(s_maxVoxel));
-    float aoStart = max(max(cull.params.y * g_pixelSize, bias), 2e-5 * max(1.0, length(g_tile.xyz) + g_tile.w));
     for (uint job = lid; job < lists; job += 64u) {
         bool ao = job == layers;
         Region g;
         g.empty = !surface;
         if (surface && !ao) g = shadowRegion(job, bias);
         uvec2 range = uvec2(0u);
-        if (!g.empty) range = buildList(ao, g, g_tile.w + aoStart + cull.params.x);
+        if (!g.empty) range = buildList(ao, g, g_tile.w + cull.params.x);
         if (ao)
             aoRanges[tileIndex] = range;
         else

@@ -3,7 +3,8 @@
 // under validation. Each scene is rendered lit at 160x90 with the acceleration toggles
 //   off       culling, world cache, id field all off (every casting object at every step)
 //   culling   the shadow / AO tile lists only
-//   cache     world cache + id field only
+//   cache     world cache only
+//   ids       id field only
 //   all       every toggle on (the default)
 // and every accelerated frame is compared with the unaccelerated one. Shadows and AO run at full
 // resolution here (resolutionScale 1: no upsampling), so each effect pixel depends only on its own
@@ -14,10 +15,12 @@
 //   - the lit image within the parity rule (support/golden.h default ImageRule: per-channel
 //     |delta| <= 5/255 for all but 0.1 % of the pixels, none over 64/255);
 //   - the effect targets effects.shadow and effects.ao (SceneRenderer::readTarget): mean per-byte
-//     |delta| <= 2/255; the per-texel parity numbers are printed. AO is bitwise equal (sdf_ao.comp's
-//     cull radius changes nothing); shadows differ in a few texels because the per-ray cull
-//     (sdfConeCull) skips objects the cone has left, which moves the later march samples (soft
-//     shadows up to ~20/255 in 0.1-0.3 % of the texels, a hard ray's flip at a contact point);
+//     |delta| <= 2/255; the per-texel parity numbers are printed. AO is bitwise equal (culled and unculled AO
+//     count the same occluders: those within maxDistance of the point); shadows differ in a few texels
+//     because the per-ray cull (sdfConeCull) skips objects the cone has left, which moves the later march
+//     samples (soft shadows up to ~20/255 in 0.1-0.3 % of the texels, a hard ray's flip at a contact point);
+//     the world cache's steps (a lower bound, shorter than the exact ones) move them too (up to ~33/255 in
+//     0.2-1.5 % of the texels); the id field leaves them bitwise equal;
 //   - the mesh-occluder scene traces nothing: there the G-buffer must agree everywhere (100 % of
 //     the pixels compared), so its checks are whole-frame;
 //   - the lists cull: the mean length of the lists of tiles with a surface (the pass's counters,
@@ -58,7 +61,8 @@ struct Toggles {
 const Toggles kOff{"off", false, false, false};
 const Toggles kAccelerated[] = {
     {"culling", true, false, false},
-    {"cache", false, true, true},
+    {"cache", false, true, false},
+    {"ids", false, false, true},
     {"all", true, true, true},
 };
 
