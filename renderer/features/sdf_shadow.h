@@ -15,9 +15,10 @@
 //
 // Acceleration (EffectsDesc::acceleration): culling starts each ray's cull from the pixel's tile
 // list of its layer (SdfCullLists::shadow, renderer/features/sdf_effects_cull.h); off, every casting
-// object is evaluated at every step. worldCache / idField (when SdfWorldCacheView is published): the
-// march steps by the cached world distance where the cone is clear and evaluates the id field's
-// object alone where it is certain (renderer/shaders/sdf_cone.glsl).
+// object is evaluated at every step. worldCache / idField (when SdfWorldCacheView is published): hard
+// rays step by the cached world distance where it is at least 4 epsilons (soft cones do not: it
+// moves their penumbra samples beyond the parity rule), and the id field's object is evaluated alone
+// where it is certain (renderer/shaders/sdf_cone.glsl).
 //
 // Output: resolutionScale 1 writes Effects::shadow directly; below 1 a transient R8_UNORM strip
 // (lowW * layers) x lowH published as EffectsLowRes::shadow for effects_upsample.

@@ -19,8 +19,7 @@
 //     count the same occluders: those within maxDistance of the point); shadows differ in a few texels
 //     because the per-ray cull (sdfConeCull) skips objects the cone has left, which moves the later march
 //     samples (soft shadows up to ~20/255 in 0.1-0.3 % of the texels, a hard ray's flip at a contact point);
-//     the world cache's steps (a lower bound, shorter than the exact ones) move them too (up to ~33/255 in
-//     0.2-1.5 % of the texels); the id field leaves them bitwise equal;
+//     the world cache (hard rays only: sdf_cone.glsl says why) and the id field leave them bitwise equal;
 //   - the mesh-occluder scene traces nothing: there the G-buffer must agree everywhere (100 % of
 //     the pixels compared), so its checks are whole-frame;
 //   - the lists cull: the mean length of the lists of tiles with a surface (the pass's counters,
