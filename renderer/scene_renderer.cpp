@@ -937,6 +937,8 @@ void SceneRenderer::Impl::addWorldCache(FrameContext& fc, const FrameDesc& desc,
         worldCache.release(graph);
     else if (!worldCache.add(fc, sdfData, cam.eye, accel, why))
         log::warn("scene renderer: {} (the frame runs without the world cache)", why);
+    // The SDF passes bind the cache in every frame: stand-ins when it did not run.
+    if (!sdfData.objects.empty() && !board.has<SdfWorldCacheView>()) worldCache.addStandIn(fc);
 }
 
 // The depth debug view spans the camera to the farthest drawn bounding sphere (meshes, bounded SDF

@@ -149,8 +149,8 @@ enum class MeshSdfMode : uint8_t {
 // rule (tests). `render.acceleration` in the scene JSON, `--accel` on the CLI (docs/FORMATS.md).
 struct AccelerationSettings {
     bool culling = true;     // 8x8 pixel tile lists of objects for the trace, shadows and AO
-    bool worldCache = true;  // clipmapped world distance: long safe steps far from surfaces
-    bool idField = true;     // object-id field: near a surface evaluate the one object it names
+    bool worldCache = false;  // clipmapped world distance: long safe steps far from surfaces
+    bool idField = false;     // object-id field: near a surface evaluate the one object it names
     bool prepass = false;    // coarse-to-fine cone prepass per 8x8 tile (optional)
     uint32_t cacheLevels = 4;              // clipmap levels (each twice the voxel size of the last)
     uint32_t cacheResolution = 64;         // voxels per side of each level (multiple of 8)

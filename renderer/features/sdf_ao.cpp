@@ -11,6 +11,7 @@
 #include "renderer/core/targets.h"
 #include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_effects_cull.h"
+#include "renderer/features/sdf_world_cache.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -66,7 +67,7 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     const SdfCullLists* cull = fc.board.find<SdfCullLists>();
     const SdfTileLists lists = cull && desc.acceleration.culling ? cull->ao : SdfTileLists{};
     bool cacheBound = false;
-    const SdfWorldCacheView cacheView = sdfEffectsWorldCache(fc, cacheBound);
+    const SdfWorldCacheView cacheView = sdfWorldCacheBinding(fc.board, cacheBound);
     const uint32_t cullFlags = (!desc.acceleration.culling ? 2u
                                 : lists.valid()            ? 1u
                                                            : 0u) |

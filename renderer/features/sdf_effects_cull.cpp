@@ -136,46 +136,6 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     fc.board.add(SdfEffectsCullCounters{data.counters, data.indices, indexBytes});
 }
 
-namespace {
-// This frame's stand-ins for the world cache (one pass per frame, shared by shadows and AO).
-struct EffectsCacheStandIn {
-    SdfWorldCacheView view;
-};
-}  // namespace
-
-SdfWorldCacheView sdfEffectsWorldCache(FrameContext& fc, bool& bound) {
-    bound = false;
-    if (const SdfWorldCacheView* view = fc.board.find<SdfWorldCacheView>()) {
-        bound = true;
-        return *view;
-    }
-    if (const EffectsCacheStandIn* standIn = fc.board.find<EffectsCacheStandIn>()) return standIn->view;
-    const EffectsCacheStandIn& data = fc.graph.addPass<EffectsCacheStandIn>(
-        "sdf_effects_cache_stand_in", fg::PassKind::Transfer,
-        [](fg::PassBuilder& b, EffectsCacheStandIn& d) {
-            rhi::TextureDesc tex;
-            tex.dimension = rhi::TextureDimension::Tex3D;
-            tex.format = rhi::Format::R32_FLOAT;
-            tex.debugName = "sdf_effects.cache_distance_stand_in";
-            d.view.distance = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
-            tex.format = rhi::Format::R32_UINT;
-            tex.debugName = "sdf_effects.cache_ids_stand_in";
-            d.view.ids = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
-            d.view.levels =
-                b.write(storageBuffer(b, "sdf_effects.cache_levels_stand_in", 16), rhi::Access::CopyDst);
-        },
-        [](const EffectsCacheStandIn& d, fg::PassContext& ctx) {
-            // The texels stay undefined: never read (the passes' cache flags are off).
-            ctx.cmd.fillBuffer(ctx.buffer(d.view.levels), 0, 16, 0u);
-        });
-    EffectsCacheStandIn standIn{data.view};
-    rhi::SamplerDesc nearest;
-    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    standIn.view.sampler = fc.cache.sampler(nearest);
-    fc.board.add(standIn);
-    return standIn.view;
-}
-
 void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists) {
     if (!lists.valid()) return;
     b.read(lists.ranges, rhi::Access::ShaderRead);

@@ -45,11 +45,6 @@ struct SdfEffectsCullCounters {
 // SceneBuffers (view, scene constants, lights), SdfSceneBuffers and GBuffer::depth.
 void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc);
 
-// The world cache as sdf_shadow / sdf_ao bind it (renderer/shaders/sdf_world_cache.glsl): the
-// frame's SdfWorldCacheView when the cache ran (`bound` true), else 1x1x1 stand-ins made once per
-// frame by a small transfer pass, which the shaders never sample (their cache flags stay off).
-SdfWorldCacheView sdfEffectsWorldCache(FrameContext& fc, bool& bound);
-
 // What sdf_shadow / sdf_ao declare and bind for one set of lists ("SdfTileRanges",
 // "SdfTileIndices" of sdf_tiles.glsl). Invalid lists bind `fallback` to both names (the shader's
 // flags say not to read them; every declared binding must be set).

@@ -12,6 +12,7 @@
 #include "renderer/core/targets.h"
 #include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_effects_cull.h"
+#include "renderer/features/sdf_world_cache.h"
 #include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
@@ -55,7 +56,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     const SdfCullLists* cull = fc.board.find<SdfCullLists>();
     const SdfTileLists lists = cull && desc.acceleration.culling ? cull->shadow : SdfTileLists{};
     bool cacheBound = false;
-    const SdfWorldCacheView cacheView = sdfEffectsWorldCache(fc, cacheBound);
+    const SdfWorldCacheView cacheView = sdfWorldCacheBinding(fc.board, cacheBound);
     const uint32_t cullFlags = (!desc.acceleration.culling ? 2u
                                 : lists.valid()            ? 1u
                                                            : 0u) |

@@ -21,40 +21,6 @@ enum : uint32_t {
     kCacheBoundFlag = 32,
 };
 
-// Without the world cache the shader never samples it, but every declared resource needs a
-// binding: 1x1x1 distance and id textures and a levels buffer with a level count of 0, made by a
-// small transfer pass (a transient must be written before it is read).
-SdfWorldCacheView addCacheStandIn(FrameContext& fc) {
-    struct Data {
-        SdfWorldCacheView view;
-    };
-    const auto& data = fc.graph.addPass<Data>(
-        "sdf_trace_cache_stand_in", fg::PassKind::Transfer,
-        [](fg::PassBuilder& b, Data& d) {
-            rhi::TextureDesc tex;
-            tex.dimension = rhi::TextureDimension::Tex3D;
-            tex.format = rhi::Format::R32_FLOAT;
-            tex.debugName = "sdf_trace.cache_distance_stand_in";
-            d.view.distance = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
-            tex.format = rhi::Format::R32_UINT;
-            tex.debugName = "sdf_trace.cache_ids_stand_in";
-            d.view.ids = b.write(b.createTexture(tex.debugName, tex), rhi::Access::CopyDst);
-            rhi::BufferDesc buf;
-            buf.size = 16;
-            buf.debugName = "sdf_trace.cache_levels_stand_in";
-            d.view.levels = b.write(b.createBuffer(buf.debugName, buf), rhi::Access::CopyDst);
-        },
-        [](const Data& d, fg::PassContext& ctx) {
-            // The texels stay undefined: they are never read (no kCacheBoundFlag).
-            ctx.cmd.fillBuffer(ctx.buffer(d.view.levels), 0, 16, 0u);
-        });
-    SdfWorldCacheView view = data.view;
-    rhi::SamplerDesc nearest;
-    nearest.minFilter = nearest.magFilter = rhi::Filter::Nearest;
-    view.sampler = fc.cache.sampler(nearest);
-    return view;
-}
-
 }  // namespace
 
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
@@ -82,9 +48,9 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const SdfCullLists* cullLists = fc.board.find<SdfCullLists>();
     const bool tiles = desc.accel.culling && cullLists && cullLists->primary.valid();
     const SdfTileLists tileLists = tiles ? cullLists->primary : SdfTileLists{};
-    const SdfWorldCacheView* cacheView = fc.board.find<SdfWorldCacheView>();
-    const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheView;
-    const SdfWorldCacheView cacheIn = cacheBound ? *cacheView : addCacheStandIn(fc);
+    bool cacheRan = false;
+    const SdfWorldCacheView cacheIn = sdfWorldCacheBinding(fc.board, cacheRan);
+    const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheRan;
     const uint32_t flags = (desc.accel.culling ? kCullFlag : 0u) | (tiles ? kTileListsFlag : 0u) |
                            (desc.countEvaluations ? kCountEvalsFlag : 0u) |
                            (desc.accel.worldCache ? kCacheFlag : 0u) | (desc.accel.idField ? kIdFlag : 0u) |

@@ -109,9 +109,45 @@ void setSdfWorldCache(ShaderParams& params, const fg::PassContext& ctx, const Sd
         .set("SdfCacheLevels", ctx.buffer(view.levels));
 }
 
+SdfWorldCacheView sdfWorldCacheBinding(const Blackboard& board, bool& bound) {
+    const SdfWorldCacheView* view = board.find<SdfWorldCacheView>();
+    bound = view != nullptr;
+    return bound ? *view : board.find<SdfWorldCacheStandIn>()->view;
+}
+
 SdfWorldCache::~SdfWorldCache() {
-    if (m_distance) m_device.destroy(m_distance);
-    if (m_ids) m_device.destroy(m_ids);
+    for (rhi::TextureHandle t : {m_distance, m_ids, m_standInDistance, m_standInIds})
+        if (t) m_device.destroy(t);
+    if (m_standInLevels) m_device.destroy(m_standInLevels);
+}
+
+void SdfWorldCache::addStandIn(FrameContext& fc) {
+    if (!m_standInLevels) {
+        rhi::TextureDesc d;
+        d.dimension = rhi::TextureDimension::Tex3D;
+        d.usage = rhi::TextureUsage::Sampled;
+        d.format = rhi::Format::R32_FLOAT;
+        d.debugName = "cache.distance_stand_in";
+        m_standInDistance = m_device.createTexture(d);
+        d.format = rhi::Format::R32_UINT;
+        d.debugName = "cache.ids_stand_in";
+        m_standInIds = m_device.createTexture(d);
+        rhi::BufferDesc b;
+        b.size = 16;
+        b.usage = rhi::BufferUsage::Storage | rhi::BufferUsage::CopyDst;
+        b.debugName = "cache.levels_stand_in";
+        m_standInLevels = m_device.createBuffer(b);
+        const uint32_t zero[4] = {0u, 0u, 0u, 0u};  // a level count of 0: every lookup misses
+        if (m_standInLevels) m_device.writeBuffer(m_standInLevels, 0, zero, sizeof(zero));
+    }
+    SdfWorldCacheStandIn& standIn = fc.board.add<SdfWorldCacheStandIn>();
+    standIn.view.distance =
+        fc.graph.importPersistent("cache.distance_stand_in", m_standInDistance, rhi::Access::ShaderSampled);
+    standIn.view.ids =
+        fc.graph.importPersistent("cache.ids_stand_in", m_standInIds, rhi::Access::ShaderSampled);
+    standIn.view.levels =
+        fc.graph.importPersistent("cache.levels_stand_in", m_standInLevels, rhi::Access::ShaderRead);
+    standIn.view.sampler = nearestSampler(fc.cache);
 }
 
 void SdfWorldCache::destroyTextures(fg::FrameGraph& graph) {

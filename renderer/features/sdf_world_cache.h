@@ -37,6 +37,17 @@ struct SdfWorldCacheView {
     rhi::SamplerHandle sampler;  // nearest (texelFetch only; GL needs it for integer textures)
 };
 
+// Published instead of SdfWorldCacheView when the cache did not run this frame: a 1x1x1 distance
+// and id texture and a levels buffer with a level count of 0, persistent (made once per renderer,
+// so a frame without the cache adds no pass for them). The SDF passes declare the cache's bindings
+// in every frame and bind these, never sampling them (their cache flags are off).
+struct SdfWorldCacheStandIn {
+    SdfWorldCacheView view;
+};
+
+// The cache a pass binds: this frame's SdfWorldCacheView (`bound` true) or the stand-ins.
+SdfWorldCacheView sdfWorldCacheBinding(const Blackboard& board, bool& bound);
+
 // Declares the cache as a shader input (textures sampled, levels read).
 void readSdfWorldCache(fg::PassBuilder& b, const SdfWorldCacheView& view);
 // Binds sdfCacheDistance, sdfCacheIds (nearest sampler; the lookup uses texelFetch) and
@@ -57,6 +68,8 @@ public:
              const scene::AccelerationSettings& settings, std::string& error);
     // The cache is off or the frame has no SDF objects: frees the textures.
     void release(fg::FrameGraph& graph);
+    // Publishes SdfWorldCacheStandIn for a frame without the cache (creates the stand-ins once).
+    void addStandIn(FrameContext& fc);
 
     const WorldCacheReport& report() const { return m_report; }
     const WorldCacheClipmap& clipmap() const { return m_clipmap; }
@@ -70,6 +83,8 @@ private:
     rhi::Device& m_device;
     WorldCacheClipmap m_clipmap;
     rhi::TextureHandle m_distance, m_ids;
+    rhi::TextureHandle m_standInDistance, m_standInIds;
+    rhi::BufferHandle m_standInLevels;
     uint32_t m_texLevels = 0, m_texResolution = 0;
     std::vector<ClipmapObject> m_objects;
     std::vector<uint8_t> m_levelsData;  // header + levels, read by the upload pass
