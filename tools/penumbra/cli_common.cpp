@@ -231,15 +231,16 @@ CLI::Option* addAccelOption(CLI::App* cmd, std::string& value) {
     return cmd->add_option(
         "--accel", value,
         "Acceleration toggles (replace the scene's render.acceleration ones): all | none | a "
-        "comma-separated list of culling, cache, id, prepass (exactly those on; all = the four; "
-        "docs/FORMATS.md)");
+        "comma-separated list of culling, cache, id, prepass (exactly those on; all = culling, cache "
+        "and id; prepass is not implemented yet and only warns; docs/FORMATS.md)");
 }
 
 bool applyAccelOption(const std::string& value, scene::AccelerationSettings& accel, std::string& error) {
     if (value.empty()) return true;
     scene::AccelerationSettings out = accel;
     const bool all = value == "all";
-    out.culling = out.worldCache = out.idField = out.prepass = all;
+    out.culling = out.worldCache = out.idField = all;
+    out.prepass = false;
     if (all || value == "none") {
         accel = out;
         return true;
@@ -248,15 +249,16 @@ bool applyAccelOption(const std::string& value, scene::AccelerationSettings& acc
     while (start <= value.size()) {
         const size_t comma = std::min(value.find(',', start), value.size());
         const std::string word = value.substr(start, comma - start);
-        bool* flag = word == "culling" ? &out.culling
-                     : word == "cache" ? &out.worldCache
-                     : word == "id"    ? &out.idField
+        bool* flag = word == "culling"   ? &out.culling
+                     : word == "cache"   ? &out.worldCache
+                     : word == "id"      ? &out.idField
                      : word == "prepass" ? &out.prepass
                                          : nullptr;
         if (!flag) {
-            error = fmt::format("--accel '{}': unknown toggle '{}' (expected all, none or a comma-separated "
-                                "list of culling, cache, id, prepass)",
-                                value, word);
+            error = fmt::format(
+                "--accel '{}': unknown toggle '{}' (expected all, none or a comma-separated "
+                "list of culling, cache, id, prepass)",
+                value, word);
             return false;
         }
         *flag = true;
