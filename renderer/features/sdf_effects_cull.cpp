@@ -136,6 +136,12 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     fc.board.add(SdfEffectsCullCounters{data.counters, data.indices, indexBytes});
 }
 
+uint32_t sdfEffectsAccelFlags(const scene::AccelerationSettings& accel, const SdfTileLists& lists,
+                              bool cacheBound) {
+    const uint32_t cull = !accel.culling ? 2u : lists.valid() ? 1u : 0u;
+    return cull | (cacheBound && accel.worldCache ? 4u : 0u) | (cacheBound && accel.idField ? 8u : 0u);
+}
+
 void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists) {
     if (!lists.valid()) return;
     b.read(lists.ranges, rhi::Access::ShaderRead);

@@ -45,6 +45,12 @@ struct SdfEffectsCullCounters {
 // SceneBuffers (view, scene constants, lights), SdfSceneBuffers and GBuffer::depth.
 void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc);
 
+// The acceleration flags of sdf_shadow / sdf_ao (their push constants): 1 the tile lists are
+// bound, 2 no culling at all (every casting object at every step), 4 world-cache steps, 8 the id
+// field (4 and 8 only when the cache ran this frame: `cacheBound`).
+uint32_t sdfEffectsAccelFlags(const scene::AccelerationSettings& accel, const SdfTileLists& lists,
+                              bool cacheBound);
+
 // What sdf_shadow / sdf_ao declare and bind for one set of lists ("SdfTileRanges",
 // "SdfTileIndices" of sdf_tiles.glsl). Invalid lists bind `fallback` to both names (the shader's
 // flags say not to read them; every declared binding must be set).

@@ -12,8 +12,8 @@
 #include "renderer/core/targets.h"
 #include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_effects_cull.h"
-#include "renderer/features/sdf_world_cache.h"
 #include "renderer/features/sdf_scene.h"
+#include "renderer/features/sdf_world_cache.h"
 
 namespace penumbra::render {
 
@@ -57,11 +57,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     const SdfTileLists lists = cull && desc.acceleration.culling ? cull->shadow : SdfTileLists{};
     bool cacheBound = false;
     const SdfWorldCacheView cacheView = sdfWorldCacheBinding(fc.board, cacheBound);
-    const uint32_t cullFlags = (!desc.acceleration.culling ? 2u
-                                : lists.valid()            ? 1u
-                                                           : 0u) |
-                               (cacheBound && desc.acceleration.worldCache ? 4u : 0u) |
-                               (cacheBound && desc.acceleration.idField ? 8u : 0u);
+    const uint32_t cullFlags = sdfEffectsAccelFlags(desc.acceleration, lists, cacheBound);
     const program::PushConstants push{
         glm::uvec4(sdfScene.objectCount, desc.shadows.maxSteps, layers, desc.shadows.hard ? 1u : 0u),
         glm::uvec4(size.width, size.height, fc.width, fc.height),
