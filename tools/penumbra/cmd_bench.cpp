@@ -296,11 +296,11 @@ void printRun(const BenchTraceOptions& opt, const BackendRun& run) {
                opt.width, opt.height, run.quality, run.sdfObjects, run.drawCalls, run.loadBefore,
                run.loadAfter);
     fmt::print("per pass, over-relaxation {}, over {} frames (ms):\n", run.omega[0], opt.frames);
-    fmt::print("{:<20} {:>10} {:>10} {:>10} {:>10}\n", "pass", "GPU med", "GPU min", "CPU med", "CPU min");
+    fmt::print("{:<28} {:>10} {:>10} {:>10} {:>10}\n", "pass", "GPU med", "GPU min", "CPU med", "CPU min");
     for (const PassSeries& s : run.passes[0])
-        fmt::print("{:<20} {:>10} {:>10} {:>10} {:>10}\n", s.name, ms(median(s.gpu)), ms(minimum(s.gpu)),
+        fmt::print("{:<28} {:>10} {:>10} {:>10} {:>10}\n", s.name, ms(median(s.gpu)), ms(minimum(s.gpu)),
                    ms(median(s.cpu)), ms(minimum(s.cpu)));
-    fmt::print("{:<20} {:>10} {:>10} {:>10} {:>10}\n", "total (per frame)", ms(median(run.totalGpu[0])),
+    fmt::print("{:<28} {:>10} {:>10} {:>10} {:>10}\n", "total (per frame)", ms(median(run.totalGpu[0])),
                ms(minimum(run.totalGpu[0])), ms(median(run.totalCpu[0])), ms(minimum(run.totalCpu[0])));
 
     const PassSeries* traceA = findPass(run.passes[0], "sdf_trace");

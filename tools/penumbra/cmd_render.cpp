@@ -43,14 +43,14 @@ nlohmann::json jsonNumber(double v) { return std::isfinite(v) ? nlohmann::json(v
 // The table: medians over all frames (the first frame also uploads meshes and textures).
 void printPassTable(const std::vector<PassSeries>& series, uint32_t frames) {
     double gpuTotal = 0, cpuTotal = 0;
-    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
+    fmt::print("{:<28} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
     for (const PassSeries& s : series) {
         const double g = median(s.gpu), c = median(s.cpu);
-        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", s.name, g, c);
+        fmt::print("{:<28} {:>10.3f} {:>10.3f}\n", s.name, g, c);
         if (std::isfinite(g)) gpuTotal += g;
         if (std::isfinite(c)) cpuTotal += c;
     }
-    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
+    fmt::print("{:<28} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
     if (frames > 1) fmt::print("(medians over {} frames)\n", frames);
 }
 

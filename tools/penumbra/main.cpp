@@ -103,13 +103,13 @@ int runInfo(const DeviceOptions& opt) {
 
 void printTimings(const std::vector<penumbra::fg::PassTiming>& timings) {
     double gpuTotal = 0, cpuTotal = 0;
-    fmt::print("{:<16} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
+    fmt::print("{:<28} {:>10} {:>10}\n", "pass", "GPU ms", "CPU ms");
     for (const auto& t : timings) {
-        fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", t.name, t.gpuMs, t.cpuMs);
+        fmt::print("{:<28} {:>10.3f} {:>10.3f}\n", t.name, t.gpuMs, t.cpuMs);
         if (std::isfinite(t.gpuMs)) gpuTotal += t.gpuMs;
         cpuTotal += t.cpuMs;
     }
-    fmt::print("{:<16} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
+    fmt::print("{:<28} {:>10.3f} {:>10.3f}\n", "total", gpuTotal, cpuTotal);
 }
 
 int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width, uint32_t height,
