@@ -231,13 +231,29 @@ void WorldCacheClipmap::objectsOverlapping(uint32_t level, glm::vec3 lo, glm::ve
     std::sort(out.begin(), out.end());
 }
 
+// A recompute job lists its objects nearest first (by the distance from the box centre to their
+// world boxes; unbounded ones first): the shader skips an object whose box distance is at least
+// the second-nearest value so far, so near objects first shrink that value early and most far
+// ones are skipped without evaluating them. The result does not depend on the order (a tie leaves
+// the cell UNCERTAIN either way), only the work does.
 void WorldCacheClipmap::addJob(uint32_t level, const CacheBox& box, CacheJobMode mode,
                                const std::vector<uint32_t>& objects) {
     CacheJob j;
     j.origin = glm::ivec4(box.min, int(level));
     j.size = glm::uvec4(glm::uvec3(box.max - box.min), uint32_t(mode));
     j.list = glm::uvec4(uint32_t(m_list.size()), uint32_t(objects.size()), 0u, 0u);
+    const size_t first = m_list.size();
     m_list.insert(m_list.end(), objects.begin(), objects.end());
+    if (mode == CacheJobMode::Recompute && objects.size() > 2) {
+        const glm::vec3 c = glm::vec3(box.min + box.max) * (0.5f * voxel(level));
+        auto key = [&](uint32_t i) {
+            if (i >= m_lo.size() || m_unbounded[i]) return -1.0f;
+            const glm::vec3 d = glm::max(glm::max(m_lo[i] - c, c - m_hi[i]), glm::vec3(0.0f));
+            return glm::dot(d, d);
+        };
+        std::stable_sort(m_list.begin() + std::ptrdiff_t(first), m_list.end(),
+                         [&](uint32_t a, uint32_t b) { return key(a) < key(b); });
+    }
     m_jobs.push_back(j);
 }
 
@@ -247,7 +263,7 @@ void WorldCacheClipmap::addBoxJobs(uint32_t level, const CacheBox& box, CacheJob
                                    uint64_t& counter) {
     if (box.empty()) return;
     const int b = int(kCacheBrick);
-    const float h = voxel(level), grow = kCacheTruncationVoxels * h + slack();
+    const float h = voxel(level), grow = kCacheTruncationVoxels * h + slack(level);
     std::vector<uint32_t> objs;
     const glm::ivec3 b0(floorDiv(box.min.x, b), floorDiv(box.min.y, b), floorDiv(box.min.z, b));
     const glm::ivec3 b1(floorDiv(box.max.x - 1, b), floorDiv(box.max.y - 1, b), floorDiv(box.max.z - 1, b));
@@ -289,40 +305,55 @@ void WorldCacheClipmap::planScroll(const std::vector<glm::ivec3>& oldOrigin) {
     }
 }
 
-// Compares every object with its state at its last cache update; changed ones queue and splat the
-// bricks of their old and new regions. Records the new states.
+// Compares every object with its per-level reference states; on each level it moved for (every
+// level when it is new, re-indexed or reshaped) its old and new regions are queued and splatted,
+// and the level's reference becomes the current state. Removed objects queue their old regions.
 void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
     std::map<CacheBrickKey, std::vector<uint32_t>> splats;  // ordered: deterministic job order
     std::unordered_map<uint32_t, Tracked> now;
     now.reserve(objects.size());
-    const float threshold = 0.5f * slack();
     for (uint32_t i = 0; i < objects.size(); ++i) {
         const ClipmapObject& o = objects[i];
+        auto it = m_tracked.find(o.key);
+        const Tracked* old = it == m_tracked.end() ? nullptr : &it->second;
+        const bool all = !old || old->index != i || old->unbounded != m_unbounded[i] ||
+                         old->localMin != o.localMin || old->localMax != o.localMax;
         Tracked t;
         t.index = i;
         t.unbounded = m_unbounded[i];
-        t.model = o.model;
-        if (!t.unbounded) t.corners = worldCorners(o);
-        t.lo = m_lo[i];
-        t.hi = m_hi[i];
-        auto it = m_tracked.find(o.key);
-        bool changed = it == m_tracked.end() || it->second.index != i || it->second.unbounded != t.unbounded;
-        if (!changed && t.unbounded) changed = it->second.model != t.model;
-        for (int c = 0; !changed && !t.unbounded && c < 8; ++c)
-            changed = glm::length(t.corners[size_t(c)] - it->second.corners[size_t(c)]) > threshold;
-        if (!changed) {
-            now[o.key] = it->second;  // keep the reference state: small moves accumulate against it
-            continue;
+        t.localMin = o.localMin;
+        t.localMax = o.localMax;
+        t.reference = old ? old->reference : std::vector<glm::mat4>{};
+        t.reference.resize(m_levelCount, o.model);
+        std::array<glm::vec3, 8> corners{};
+        if (!t.unbounded) corners = worldCorners(o);
+        bool any = false;
+        for (uint32_t l = 0; l < m_levelCount; ++l) {
+            const bool hadLevel = old && l < old->reference.size();
+            bool changed = all || !hadLevel;
+            if (!changed && old->reference[l] != o.model) {
+                if (t.unbounded) {
+                    changed = true;
+                } else {  // a corner moved more than s_l / 2 from the level's reference
+                    const auto ref = worldCorners({o.key, old->reference[l], o.localMin, o.localMax});
+                    for (int c = 0; !changed && c < 8; ++c)
+                        changed = glm::length(corners[size_t(c)] - ref[size_t(c)]) > 0.5f * slack(l);
+                }
+            }
+            if (!changed) continue;  // small moves accumulate against the level's reference
+            any = true;
+            if (hadLevel) markOldRegion(l, *old, o.key, i, splats);
+            markRegion(l, m_lo[i], m_hi[i], t.unbounded, i, splats);
+            t.reference[l] = o.model;
         }
-        ++m_stats.changedObjects;
-        if (it != m_tracked.end()) markRegion(it->second.lo, it->second.hi, it->second.unbounded, i, splats);
-        markRegion(t.lo, t.hi, t.unbounded, i, splats);
-        now[o.key] = t;
+        if (any) ++m_stats.changedObjects;
+        now[o.key] = std::move(t);
     }
     for (const auto& [key, t] : m_tracked)
         if (!now.count(key)) {
             ++m_stats.changedObjects;
-            markRegion(t.lo, t.hi, t.unbounded, kCacheNone, splats);
+            for (uint32_t l = 0; l < m_levelCount && l < t.reference.size(); ++l)
+                markOldRegion(l, t, key, kCacheNone, splats);
         }
     m_tracked = std::move(now);
     for (auto& [key, objs] : splats) {
@@ -338,30 +369,44 @@ void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
     }
 }
 
-// Queues the bricks of every level within T + s of the world box [lo, hi] (every brick of the
-// windows when `everywhere`), and lists `splatObject` (kCacheNone: none) for their splat.
-void WorldCacheClipmap::markRegion(glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
+// Queues the region of a tracked object's reference state on one level.
+void WorldCacheClipmap::markOldRegion(uint32_t level, const Tracked& t, uint32_t key, uint32_t splatObject,
+                                      std::map<CacheBrickKey, std::vector<uint32_t>>& splats) {
+    glm::vec3 lo(0.0f), hi(0.0f);
+    if (!t.unbounded) {
+        const auto c = worldCorners({key, t.reference[level], t.localMin, t.localMax});
+        lo = hi = c[0];
+        for (const glm::vec3& p : c) {
+            lo = glm::min(lo, p);
+            hi = glm::max(hi, p);
+        }
+    }
+    markRegion(level, lo, hi, t.unbounded, splatObject, splats);
+}
+
+// Queues the bricks of one level within T + s of the world box [lo, hi] (every brick of the
+// window when `everywhere`), and lists `splatObject` (kCacheNone: none) for their splat.
+void WorldCacheClipmap::markRegion(uint32_t l, glm::vec3 lo, glm::vec3 hi, bool everywhere,
+                                   uint32_t splatObject,
                                    std::map<CacheBrickKey, std::vector<uint32_t>>& splats) {
     const int b = int(kCacheBrick);
-    for (uint32_t l = 0; l < m_levelCount; ++l) {
-        const float h = voxel(l), grow = kCacheTruncationVoxels * h + slack();
-        CacheBox region = window(l);
-        if (!everywhere)
-            region = intersect(region, {floorToVoxel(lo - glm::vec3(grow), h),
-                                        floorToVoxel(hi + glm::vec3(grow), h) + glm::ivec3(1)});
-        if (region.empty()) continue;
-        const glm::ivec3 b0(floorDiv(region.min.x, b), floorDiv(region.min.y, b), floorDiv(region.min.z, b));
-        const glm::ivec3 b1(floorDiv(region.max.x - 1, b), floorDiv(region.max.y - 1, b),
-                            floorDiv(region.max.z - 1, b));
-        for (int z = b0.z; z <= b1.z; ++z)
-            for (int y = b0.y; y <= b1.y; ++y)
-                for (int x = b0.x; x <= b1.x; ++x) {
-                    const CacheBrickKey key = brickKey(l, {x, y, z});
-                    if (m_queued.insert(key).second) m_queue.push_back(key);
-                    std::vector<uint32_t>& s = splats[key];
-                    if (splatObject != kCacheNone) s.push_back(splatObject);
-                }
-    }
+    const float h = voxel(l), grow = kCacheTruncationVoxels * h + slack(l);
+    CacheBox region = window(l);
+    if (!everywhere)
+        region = intersect(region, {floorToVoxel(lo - glm::vec3(grow), h),
+                                    floorToVoxel(hi + glm::vec3(grow), h) + glm::ivec3(1)});
+    if (region.empty()) return;
+    const glm::ivec3 b0(floorDiv(region.min.x, b), floorDiv(region.min.y, b), floorDiv(region.min.z, b));
+    const glm::ivec3 b1(floorDiv(region.max.x - 1, b), floorDiv(region.max.y - 1, b),
+                        floorDiv(region.max.z - 1, b));
+    for (int z = b0.z; z <= b1.z; ++z)
+        for (int y = b0.y; y <= b1.y; ++y)
+            for (int x = b0.x; x <= b1.x; ++x) {
+                const CacheBrickKey key = brickKey(l, {x, y, z});
+                if (m_queued.insert(key).second) m_queue.push_back(key);
+                std::vector<uint32_t>& s = splats[key];
+                if (splatObject != kCacheNone) s.push_back(splatObject);
+            }
 }
 
 // Recomputes queued bricks (their part inside the current windows) up to `budget` voxels; at
@@ -382,7 +427,7 @@ void WorldCacheClipmap::drainQueue(uint32_t budget) {
         if (v == 0) continue;  // scrolled out: recomputed when it scrolls back in
         const float h = voxel(level);
         objectsOverlapping(level, glm::vec3(box.min) * h, glm::vec3(box.max) * h,
-                           kCacheTruncationVoxels * h + slack(), objs);
+                           kCacheTruncationVoxels * h + slack(level), objs);
         addJob(level, box, CacheJobMode::Recompute, objs);
         done += v;
         m_stats.dirtyVoxels += v;
@@ -397,7 +442,7 @@ void WorldCacheClipmap::fillLevelsGpu() {
         CacheLevelGpu& g = m_levelsGpu[l];
         g.origin = glm::ivec4(m_origin[l], int(l) * r);
         g.wrap = glm::ivec4(posMod(m_origin[l].x, r), posMod(m_origin[l].y, r), posMod(m_origin[l].z, r), 0);
-        g.params = glm::vec4(h, kCacheTruncationVoxels * h, 0.8660255f * h + slack(), slack());
+        g.params = glm::vec4(h, kCacheTruncationVoxels * h, 0.8660255f * h + slack(l), slack(l));
     }
 }
 

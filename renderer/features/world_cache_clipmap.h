@@ -16,32 +16,35 @@
 //   axis that scrolled in (in the same frame: those texels hold another place until then).
 //
 // Values (conservative; the GPU pass writes them): voxel v with centre c
-//   D(v)  = min(T_i, min over objects d_obj(c)) - margin_i,  margin_i = sqrt(3)/2 h_i + s
-//   id(v) = the nearest object when d_2 - U_1 >= sqrt(3) h_i + 2 s (d_2 the second-nearest value,
+//   D(v)  = min(T_i, min over objects d_obj(c)) - margin_i,  margin_i = sqrt(3)/2 h_i + s_i
+//   id(v) = the nearest object when d_2 - U_1 >= sqrt(3) h_i + 2 s_i (d_2 the second-nearest value,
 //           at most T_i; U_1 an upper bound of the nearest's true distance at c), UNCERTAIN
 //           otherwise or when no upper bound is known, NONE when no object is within T_i
-// with T_i = 8 h_i the truncation, s = h_0 / 4 the motion slack, d_obj the conservative
+// with T_i = 8 h_i the truncation, s_i = h_i / 4 the level's motion slack, d_obj the conservative
 // sdfObjectDistance (raised outside the object's bounds box to the box distance). For p in the
 // cell |p - c| <= sqrt(3)/2 h_i, so the true distance at p >= D(v) as long as no object moved more
-// than s since the value was computed; the id rule is the certain version of mTec's "neighbouring
-// cells disagree" rule: the nearest object's true distance gains at most sqrt(3)/2 h + s and every
+// than s_i since the value was computed; the id rule is the certain version of mTec's "neighbouring
+// cells disagree" rule: the nearest object's true distance gains at most sqrt(3)/2 h + s_i and every
 // other's loses at most as much anywhere in the cell, so the named object is the nearest
 // everywhere in it. U_1 (sdf_world_cache_update.comp): exact shape programs (shapes, unions,
 // transforms) under any scale (sigma_max / sigma_min times the value outside); smooth or
 // subtractive CSG, repetition and fields have none (their cells stay UNCERTAIN: a field's
 // interpolated surface, the one the trace hits, may lie nearer than its mesh's).
 //
-// Changes: per object (keyed by entity index) the world box corners at its last cache update are
-// kept. It moved when a corner moved more than s / 2 since then: two values computed at states
-// within s / 2 of that reference differ by at most s, which the margin covers, so smaller moves
-// need no update. A moved, added or removed object (or one whose index in the frame's object array
-// changed: ids are indices) queues the bricks (8^3 voxels) of its old and new world box grown by
-// T_i + s at every level, and gets an immediate min-splat over the same bricks this frame (D =
-// min(D, d_new - margin), id = UNCERTAIN unless NONE stays true) so the cache is conservative
-// before the queue reaches them. Queued bricks are recomputed against only the objects whose
-// grown box overlaps them (a uniform grid per level), at most budgetVoxels per frame (at least one
-// brick), the rest stays queued. Unbounded objects (planes) take part everywhere; one that changes
-// dirties every level.
+// Changes: per object (keyed by entity index) and per level the model matrix at its last update of
+// that level is kept (the reference). It moved for level i when a world box corner moved more than
+// s_i / 2 since then: two values computed at states within s_i / 2 of that reference differ by at
+// most s_i, which the level's margin covers, so smaller moves need no update of that level. The
+// slack grows with the voxel, so a small per-frame move re-marks only the fine levels (a coarse
+// level, whose bricks list the most objects, follows once the move adds up to its s_i / 2). A
+// moved object queues the bricks (8^3 voxels) of its old (reference) and new world box grown by
+// T_i + s_i on each level it moved for; an added or removed object (or one whose index in the
+// frame's object array changed: ids are indices) on every level. Each queued brick gets an
+// immediate min-splat this frame (D = min(D, d_new - margin_i), id = UNCERTAIN unless NONE stays
+// true) so the cache is conservative before the queue reaches it. Queued bricks are recomputed
+// against only the objects whose grown box overlaps them (a uniform grid per level), at most
+// budgetVoxels per frame (at least one brick), the rest stays queued. Unbounded objects (planes)
+// take part everywhere; one that changes dirties every level.
 #pragma once
 
 #include <array>
@@ -60,7 +63,7 @@ namespace penumbra::render {
 
 inline constexpr uint32_t kCacheBrick = 8;                // voxels per brick side (one workgroup)
 inline constexpr float kCacheTruncationVoxels = 8.0f;     // T_i = 8 h_i
-inline constexpr float kCacheSlackVoxels = 0.25f;         // s = h_0 / 4
+inline constexpr float kCacheSlackVoxels = 0.25f;         // s_i = h_i / 4
 inline constexpr uint32_t kCacheNone = 0xffffffffu;       // id: no object within T_i
 inline constexpr uint32_t kCacheUncertain = 0xfffffffeu;  // id: the nearest object is not certain
 
@@ -75,7 +78,7 @@ struct ClipmapSettings {
     uint32_t levels = 4;
     uint32_t resolution = 64;  // rounded down to a multiple of 8 (at least 8)
     float voxel = 0.0f;        // h_0; 0: from the scene
-    uint32_t budgetVoxels = 1u << 20;
+    uint32_t budgetVoxels = 4096;  // scene::AccelerationSettings::cacheBudgetVoxels
 };
 
 enum class CacheJobMode : uint32_t { Recompute = 0, Splat = 1 };
@@ -146,7 +149,7 @@ public:
     uint32_t levelCount() const { return m_levelCount; }
     uint32_t resolution() const { return m_resolution; }
     float voxel(uint32_t level) const { return m_voxel0 * float(1u << level); }
-    float slack() const { return kCacheSlackVoxels * m_voxel0; }
+    float slack(uint32_t level = 0) const { return kCacheSlackVoxels * voxel(level); }  // s_i
     glm::ivec3 origin(uint32_t level) const { return m_origin[level]; }
     const std::vector<CacheLevelGpu>& levels() const { return m_levelsGpu; }
     const std::vector<CacheJob>& jobs() const { return m_jobs; }  // splats first, then recomputes
@@ -164,9 +167,8 @@ private:
     struct Tracked {
         uint32_t index = 0;
         bool unbounded = false;
-        glm::mat4 model{1.0f};
-        std::array<glm::vec3, 8> corners{};
-        glm::vec3 lo{0.0f}, hi{0.0f};
+        glm::vec3 localMin{0.0f}, localMax{0.0f};
+        std::vector<glm::mat4> reference;  // per level: the model at that level's last update
     };
     struct Grid {
         float cell = 1.0f;
@@ -178,7 +180,9 @@ private:
     void buildGrids();
     void planScroll(const std::vector<glm::ivec3>& oldOrigin);
     void planChanges(const std::vector<ClipmapObject>& objects);
-    void markRegion(glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
+    void markOldRegion(uint32_t level, const Tracked& t, uint32_t key, uint32_t splatObject,
+                       std::map<CacheBrickKey, std::vector<uint32_t>>& splats);
+    void markRegion(uint32_t level, glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
                     std::map<CacheBrickKey, std::vector<uint32_t>>& splats);
     void drainQueue(uint32_t budget);
     void addBoxJobs(uint32_t level, const CacheBox& box, CacheJobMode mode, uint64_t& counter);

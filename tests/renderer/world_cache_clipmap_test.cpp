@@ -48,7 +48,7 @@ uint64_t expectedBrickVoxels(const WorldCacheClipmap& c,
                              const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
     std::set<std::tuple<uint32_t, int, int, int>> bricks;
     for (uint32_t l = 0; l < c.levelCount(); ++l) {
-        const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack();
+        const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack(l);
         const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
         for (const auto& [lo, hi] : boxes) {
             // As the clipmap rounds: the grown box in float, divided by h in double.
