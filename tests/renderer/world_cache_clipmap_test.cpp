@@ -173,6 +173,31 @@ TEST(WorldCacheClipmap, SubSlackMovesMarkNothing) {
     EXPECT_EQ(c.stats().changedObjects, 1u);  // small moves accumulate against the last update
 }
 
+// The slack grows with the level's voxel (s_i = h_i / 4) and each level keeps its own reference
+// state: a move past s_0 / 2 but within s_1 / 2 re-marks level 0 only; once the moves add up past
+// s_1 / 2 (against level 1's reference) level 1 follows, level 2 (s_2 / 2 = 2 s_0) still not.
+TEST(WorldCacheClipmap, CoarseLevelsFollowOnlyMovesBeyondTheirSlack) {
+    WorldCacheClipmap c;
+    auto objects = spreadScene();
+    const glm::vec3 cam(0.1f);
+    c.update(settings(), cam, objects);
+    const float s0 = c.slack(0);
+    EXPECT_FLOAT_EQ(c.slack(1), 2.0f * s0);  // s_i = h_i / 4
+    auto levelsOfJobs = [&c] {
+        std::set<int> levels;
+        for (const CacheJob& j : c.jobs()) levels.insert(j.origin.w);
+        return levels;
+    };
+    objects[1] = box(2, {0.75f * s0, 0, 0});  // 0.75 s0: past s0 / 2, within s1 / 2 = s0
+    c.update(settings(), cam, objects);
+    EXPECT_EQ(c.stats().changedObjects, 1u);
+    EXPECT_EQ(levelsOfJobs(), std::set<int>({0}));  // jobs (splats and recomputes) on level 0 only
+    objects[1] = box(2, {1.5f * s0, 0, 0});         // 1.5 s0 from level 1's reference, 0.75 s0 from level 0's
+    c.update(settings(), cam, objects);
+    EXPECT_EQ(c.stats().changedObjects, 1u);
+    EXPECT_EQ(levelsOfJobs(), std::set<int>({0, 1}));  // level 2: 1.5 s0 < s2 / 2 = 2 s0
+}
+
 TEST(WorldCacheClipmap, BudgetDrainsTheQueueOverFramesLosingNothing) {
     WorldCacheClipmap c;
     auto objects = spreadScene();
