@@ -37,20 +37,20 @@ TEST(AccelerationJson, ParsesEveryKey) {
     assets::AssetManager assets;
     Scene s;
     std::string error;
-    ASSERT_TRUE(parseScene(withAccel(R"({"culling": false, "worldCache": false, "idField": true,
+    ASSERT_TRUE(parseScene(withAccel(R"({"culling": false, "worldCache": true, "idField": true,
         "prepass": true, "cacheLevels": 6, "cacheResolution": 96, "cacheVoxel": 0.125,
-        "cacheBudgetVoxels": 4096})"),
+        "cacheBudgetVoxels": 8192})"),
                            assets, s, error))
         << error;
     const AccelerationSettings& a = s.settings.acceleration;
     EXPECT_FALSE(a.culling);
-    EXPECT_FALSE(a.worldCache);
+    EXPECT_TRUE(a.worldCache);  // every value differs from its default, so each key is read
     EXPECT_TRUE(a.idField);
     EXPECT_TRUE(a.prepass);
     EXPECT_EQ(a.cacheLevels, 6u);
     EXPECT_EQ(a.cacheResolution, 96u);
     EXPECT_FLOAT_EQ(a.cacheVoxel, 0.125f);
-    EXPECT_EQ(a.cacheBudgetVoxels, 4096u);
+    EXPECT_EQ(a.cacheBudgetVoxels, 8192u);
 
     // Omitted keys keep AccelerationSettings' defaults.
     Scene d;
