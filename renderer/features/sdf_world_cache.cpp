@@ -115,6 +115,25 @@ SdfWorldCacheView sdfWorldCacheBinding(const Blackboard& board, bool& bound) {
     return bound ? *view : board.find<SdfWorldCacheStandIn>()->view;
 }
 
+namespace {
+// The cache's pair of 3D textures (R32F distance, R32UI ids) of r x r x depth texels, named
+// `cache.distance<suffix>` and `cache.ids<suffix>`.
+void createTexturePair(rhi::Device& device, uint32_t r, uint32_t depth, rhi::TextureUsage usage,
+                       const char* suffix, rhi::TextureHandle& distance, rhi::TextureHandle& ids) {
+    rhi::TextureDesc d;
+    d.dimension = rhi::TextureDimension::Tex3D;
+    d.width = d.height = r;
+    d.depthOrLayers = depth;
+    d.usage = usage;
+    d.format = rhi::Format::R32_FLOAT;
+    d.debugName = fmt::format("cache.distance{}", suffix);
+    distance = device.createTexture(d);
+    d.format = rhi::Format::R32_UINT;
+    d.debugName = fmt::format("cache.ids{}", suffix);
+    ids = device.createTexture(d);
+}
+}  // namespace
+
 SdfWorldCache::~SdfWorldCache() {
     for (rhi::TextureHandle t : {m_distance, m_ids, m_standInDistance, m_standInIds})
         if (t) m_device.destroy(t);
@@ -123,15 +142,8 @@ SdfWorldCache::~SdfWorldCache() {
 
 void SdfWorldCache::addStandIn(FrameContext& fc) {
     if (!m_standInLevels) {
-        rhi::TextureDesc d;
-        d.dimension = rhi::TextureDimension::Tex3D;
-        d.usage = rhi::TextureUsage::Sampled;
-        d.format = rhi::Format::R32_FLOAT;
-        d.debugName = "cache.distance_stand_in";
-        m_standInDistance = m_device.createTexture(d);
-        d.format = rhi::Format::R32_UINT;
-        d.debugName = "cache.ids_stand_in";
-        m_standInIds = m_device.createTexture(d);
+        createTexturePair(m_device, 1, 1, rhi::TextureUsage::Sampled, "_stand_in", m_standInDistance,
+                          m_standInIds);
         rhi::BufferDesc b;
         b.size = 16;
         b.usage = rhi::BufferUsage::Storage | rhi::BufferUsage::CopyDst;
@@ -170,17 +182,9 @@ bool SdfWorldCache::ensureTextures(fg::FrameGraph& graph, std::string& error) {
     const uint32_t r = m_clipmap.resolution(), levels = m_clipmap.levelCount();
     if (m_distance && m_texLevels == levels && m_texResolution == r) return true;
     destroyTextures(graph);
-    rhi::TextureDesc d;
-    d.dimension = rhi::TextureDimension::Tex3D;
-    d.width = d.height = r;
-    d.depthOrLayers = r * levels;
-    d.usage = rhi::TextureUsage::Sampled | rhi::TextureUsage::Storage | rhi::TextureUsage::CopySrc;
-    d.format = rhi::Format::R32_FLOAT;
-    d.debugName = "cache.distance";
-    m_distance = m_device.createTexture(d);
-    d.format = rhi::Format::R32_UINT;
-    d.debugName = "cache.ids";
-    m_ids = m_device.createTexture(d);
+    createTexturePair(m_device, r, r * levels,
+                      rhi::TextureUsage::Sampled | rhi::TextureUsage::Storage | rhi::TextureUsage::CopySrc,
+                      "", m_distance, m_ids);
     if (!m_distance || !m_ids) {
         error = fmt::format("sdf world cache: creating two {}x{}x{} textures failed", r, r, r * levels);
         release(graph);
