@@ -175,60 +175,70 @@ float shapeOtherCopiesBound(vec3 local, ivec3 id, vec3 spacing, uvec3 count, vec
 #define SHAPE_EVAL_MARGIN(mag) (1.9073486328125e-6 * (mag))
 
 float evalShapeProgram(uint first, vec3 point) {
-    vec3 framePoint[SHAPE_MAX_FRAMES + 1];
-    float frameScale[SHAPE_MAX_FRAMES + 1];
+    // The current frame (p, s) and the top distance live in registers; the arrays hold what lies
+    // below them (frames 0 .. fp - 1, distances 0 .. sp - 2). Where instructions share work it is
+    // done once for all of them (a GPU that runs every branch of a SIMD group pays for each one):
+    // one array access per kind, one repetition cell, one (smooth) minimum.
+    vec3 framePoint[SHAPE_MAX_FRAMES];
+    float frameScale[SHAPE_MAX_FRAMES];
     float stack[SHAPE_MAX_DISTANCES];
     int fp = 0;
     int sp = 0;
-    framePoint[0] = point;
-    frameScale[0] = 1.0;
+    vec3 p = point;
+    float s = 1.0;
+    float top = SHAPE_FAR;
     float mag = max(abs(point.x), max(abs(point.y), abs(point.z)));
     uint count = shapeRecords[first].head.z;  // header: i = (version, instructions, stacks)
     for (uint i = first + 1u; i <= first + count; ++i) {
         ShapeInstruction r = shapeRecords[i];
         uint op = r.head.x;
-        vec3 p = framePoint[fp];
-        float s = frameScale[fp];
         if (op >= SHAPE_OP_SPHERE && op <= SHAPE_OP_PLANE) {
-            stack[sp] = shapeDistance(op, r.a, p) * s;
+            if (sp > 0) stack[sp - 1] = top;
+            top = shapeDistance(op, r.a, p) * s;
             sp += 1;
             // Rounding of the shape formula happens at the size of its parameters (frame units).
             mag = max(mag, max(max(abs(r.a.x), abs(r.a.y)), max(abs(r.a.z), abs(r.a.w))) * s);
         } else if (op >= SHAPE_OP_UNION && op <= SHAPE_OP_SMOOTH_INTERSECT) {
+            // a (below) op b (top); the maxima are negated minima: max(a, b) = -min(-a, -b),
+            // max(a, -b) = -min(-a, b), and sdf::smoothMax likewise (exact: negation is).
             sp -= 1;
-            float b = stack[sp];
             float a = stack[sp - 1];
-            float k = r.a.x * s;
-            float v = a;
-            if (op == SHAPE_OP_UNION) v = min(a, b);
-            else if (op == SHAPE_OP_SUBTRACT) v = max(a, -b);
-            else if (op == SHAPE_OP_INTERSECT) v = max(a, b);
-            else if (op == SHAPE_OP_SMOOTH_UNION) v = shapeSmoothMin(a, b, k);
-            else if (op == SHAPE_OP_SMOOTH_SUBTRACT) v = shapeSmoothMax(a, -b, k);
-            else v = shapeSmoothMax(a, b, k);
-            stack[sp - 1] = v;
-        } else if (op == SHAPE_OP_PUSH_TRANSFORM) {
-            mag = max(mag, max(abs(r.a.x), max(abs(r.a.y), abs(r.a.z))) * s);
-            framePoint[fp + 1] = shapeInverseRotate(r.b, p - r.a.xyz) / r.a.w;
-            frameScale[fp + 1] = s * r.a.w;
-            fp += 1;
-        } else if (op == SHAPE_OP_PUSH_REPEAT) {
-            mag = max(mag, max(r.a.x, max(r.a.y, r.a.z)) * s);
+            bool isMax = op == SHAPE_OP_SUBTRACT || op == SHAPE_OP_INTERSECT ||
+                         op == SHAPE_OP_SMOOTH_SUBTRACT || op == SHAPE_OP_SMOOTH_INTERSECT;
+            bool subtract = op == SHAPE_OP_SUBTRACT || op == SHAPE_OP_SMOOTH_SUBTRACT;
+            float x = isMax ? -a : a;
+            float y = isMax != subtract ? -top : top;
+            float m = op >= SHAPE_OP_SMOOTH_UNION ? shapeSmoothMin(x, y, r.a.x * s) : min(x, y);
+            top = isMax ? -m : m;
+        } else if (op >= SHAPE_OP_PUSH_TRANSFORM && op <= SHAPE_OP_POP_REPEAT) {
+            bool push = op == SHAPE_OP_PUSH_TRANSFORM || op == SHAPE_OP_PUSH_REPEAT;
+            if (push) {
+                framePoint[fp] = p;
+                frameScale[fp] = s;
+                fp += 1;
+            } else {
+                fp -= 1;
+                p = framePoint[fp];
+                s = frameScale[fp];
+            }
+            // PushRepeat enters the cell of the current point, PopRepeat bounds the other copies
+            // around the cell of the restored one.
             ivec3 id;
-            framePoint[fp + 1] = shapeRepeatCell(p, r.a.xyz, r.head.yzw, id);
-            frameScale[fp + 1] = s;
-            fp += 1;
-        } else if (op == SHAPE_OP_POP_TRANSFORM) {
-            fp -= 1;
-        } else if (op == SHAPE_OP_POP_REPEAT) {
-            fp -= 1;
-            ivec3 id;
-            vec3 local = shapeRepeatCell(framePoint[fp], r.a.xyz, r.head.yzw, id);
-            float g = shapeOtherCopiesBound(local, id, r.a.xyz, r.head.yzw, r.b.xyz, r.c.xyz);
-            stack[sp - 1] = min(stack[sp - 1], g * frameScale[fp]);
+            vec3 local = shapeRepeatCell(p, r.a.xyz, r.head.yzw, id);
+            if (op == SHAPE_OP_PUSH_TRANSFORM) {
+                mag = max(mag, max(abs(r.a.x), max(abs(r.a.y), abs(r.a.z))) * s);
+                p = shapeInverseRotate(r.b, p - r.a.xyz) / r.a.w;
+                s = s * r.a.w;
+            } else if (op == SHAPE_OP_PUSH_REPEAT) {
+                mag = max(mag, max(r.a.x, max(r.a.y, r.a.z)) * s);
+                p = local;
+            } else if (op == SHAPE_OP_POP_REPEAT) {
+                float g = shapeOtherCopiesBound(local, id, r.a.xyz, r.head.yzw, r.b.xyz, r.c.xyz);
+                top = min(top, g * s);
+            }
         }
     }
-    float d = sp > 0 ? stack[sp - 1] : SHAPE_FAR;
+    float d = sp > 0 ? top : SHAPE_FAR;
 #ifdef SHAPE_EVAL_NO_MARGIN
     return d;  // the raw float evaluation (tests measure its rounding error)
 #else
