@@ -90,10 +90,10 @@ TraceSettings tracePreset(TraceQuality quality) {
         case TraceQuality::Medium:
             break;
         case TraceQuality::High:
-            s = {256, 3, 0.25f, 0.25f, 1.2f, 1.0f};
+            s = {256, 24, 0.25f, 0.25f, 1.2f, 1.0f};
             break;
         case TraceQuality::Reference:
-            s = {2048, 4, 0.01f, 0.05f, 1.0f, 1.0f};
+            s = {2048, 32, 0.01f, 0.05f, 1.0f, 1.0f};
             break;
     }
     return s;

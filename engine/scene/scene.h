@@ -77,7 +77,7 @@ bool parseTraceQuality(std::string_view text, TraceQuality& out);
 
 struct TraceSettings {
     uint32_t maxSteps = 128;      // step limit per ray (an object's own maxSteps may raise it)
-    uint32_t refineSteps = 2;     // steps on the raw distance after a hit (plain, then secant)
+    uint32_t refineSteps = 16;    // hit decision: evaluations per object searched for its root (0: none)
     float hitEpsilon = 0.5f;      // hit when the distance is below this many pixel footprints
     float normalEpsilon = 0.5f;   // gradient step for normals, pixel footprints
     float overRelaxation = 1.3f;  // Keinert's omega (1 = plain sphere tracing), in [1, 2)
@@ -148,14 +148,14 @@ enum class MeshSdfMode : uint8_t {
 // Each toggle only changes speed: the picture matches the unaccelerated render within the parity
 // rule (tests). `render.acceleration` in the scene JSON, `--accel` on the CLI (docs/FORMATS.md).
 struct AccelerationSettings {
-    bool culling = true;     // 8x8 pixel tile lists of objects for the trace, shadows and AO
-    bool worldCache = false;  // clipmapped world distance: long safe steps far from surfaces
-    bool idField = false;     // object-id field: near a surface evaluate the one object it names
-    bool prepass = false;    // coarse-to-fine cone prepass per 8x8 tile (optional)
-    uint32_t cacheLevels = 4;              // clipmap levels (each twice the voxel size of the last)
-    uint32_t cacheResolution = 64;         // voxels per side of each level (multiple of 8)
-    float cacheVoxel = 0.0f;               // level-0 voxel size in world units; 0: from the scene's size
-    uint32_t cacheBudgetVoxels = 4096;     // dirty-region voxels recomputed per frame (rest queued)
+    bool culling = true;                // 8x8 pixel tile lists of objects for the trace, shadows and AO
+    bool worldCache = false;            // clipmapped world distance: long safe steps far from surfaces
+    bool idField = false;               // object-id field: near a surface evaluate the one object it names
+    bool prepass = false;               // coarse-to-fine cone prepass per 8x8 tile (optional)
+    uint32_t cacheLevels = 4;           // clipmap levels (each twice the voxel size of the last)
+    uint32_t cacheResolution = 64;      // voxels per side of each level (multiple of 8)
+    float cacheVoxel = 0.0f;            // level-0 voxel size in world units; 0: from the scene's size
+    uint32_t cacheBudgetVoxels = 4096;  // dirty-region voxels recomputed per frame (rest queued)
 };
 
 struct RenderSettings {

@@ -19,11 +19,16 @@
 //                   one is taken back (safe fallback) and omega drops to 1 for the rest of the ray
 //   fieldSafety     times the trilinear interpolation bound subtracted from field distances: 1
 //                   never steps through the baked surface, 0 trusts the interpolated value
-//   refineSteps     after a hit, steps on the raw distance of the hit object (a plain step, then
-//                   secant steps along the ray; each at most one voxel) onto its surface
+//   refineSteps     the hit decision: at a candidate (raw distance below hitEpsilon) the first
+//                   root along the ray of each object that could be crossed first is searched
+//                   (secant steps, regula falsi on a bracket; sdf_trace.comp objectRoot) with at
+//                   most this many evaluations per object; the earliest root is the hit, none is a
+//                   near miss. 0: every candidate is a hit where it is (no refinement)
 //
-// Acceleration (scene::AccelerationSettings; each toggle changes speed only, the picture stays
-// within the parity rule of the unaccelerated trace: tests/renderer/sdf_accel_parity_test.cpp):
+// Acceleration (scene::AccelerationSettings; each toggle changes speed only: the hit decision does
+// not depend on where the march's samples land, so the picture stays within the parity rule of the
+// unaccelerated trace on analytic scenes; baked fields still differ on a few silhouette pixels:
+// tests/renderer/sdf_accel_parity_test.cpp):
 //   culling         the pixel's tile list (SdfCullLists::primary on the blackboard, every traced
 //                   object without it) narrowed to the boxes the ray crosses; off: every traced
 //                   object at every step (mTec's "no optimization"; the march interval, from the

@@ -106,8 +106,13 @@ float visibility(Light light, vec3 p, vec3 n, float pixelSize) {
     float bias = sdfSurfaceBias(p, pixelSize, shadow.counts.x);
     vec3 origin = p + n * bias;
     float epsilon = max(0.5 * pixelSize, 1e-6 * max(length(p), 1.0));
-    return sdfConeTrace(origin, l, 2.0 * pixelSize + bias, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x,
-                        epsilon);
+    // A hard ray stops within epsilon of any surface, its receiver's own included: under a grazing
+    // light (n.l small) it starts where it has risen epsilon above the receiver's tangent plane
+    // (bias + t n.l), so a flat receiver traced exactly onto its surface does not shadow itself.
+    float tStart = 2.0 * pixelSize + bias;
+    float ndl = dot(n, l);
+    if (sinHalf <= 0.0 && ndl > 0.0) tStart = max(tStart, (1.1 * epsilon - bias) / ndl);
+    return sdfConeTrace(origin, l, tStart, tMax, sinHalf, shadow.counts.x, shadow.counts.y, shadow.params.x, epsilon);
 }
 
 void main() {

@@ -170,7 +170,7 @@ std::vector<Setting> buildSweep(const std::string& sweep, bool bakes) {
         s.trace.fieldSafety = v;
         out.push_back(s);
     }
-    for (uint32_t v : quick ? std::vector<uint32_t>{0} : std::vector<uint32_t>{0, 1, 2, 4}) {
+    for (uint32_t v : quick ? std::vector<uint32_t>{0} : std::vector<uint32_t>{0, 4, 8, 16, 32}) {
         Setting s;
         s.param = "refineSteps";
         s.value = std::to_string(v);
@@ -909,7 +909,7 @@ CLI::App* addBenchAccuracyCommand(CLI::App& group, BenchAccuracyOptions& opt) {
         ->capture_default_str();
     cmd->add_option("--sweep", opt.sweep,
                     "default: quality low/medium/high/reference, maxSteps 16..256, hitEpsilon 2..0.02, "
-                    "overRelaxation 1..1.5, fieldSafety 0/0.5/1, refineSteps 0..4, bakeResolution 32..256 "
+                    "overRelaxation 1..1.5, fieldSafety 0/0.5/1, refineSteps 0..32, bakeResolution 32..256 "
                     "(scenes with mesh bakes); quick: one value of each besides medium")
         ->check(CLI::IsMember({"default", "quick"}))
         ->capture_default_str();
