@@ -187,17 +187,28 @@ uint candidateObject(uint i, float tFrom) {
 // no root before). Every evaluation counts
 // against the step limit; a search that the limit cuts short takes its best point when it is within
 // eps / 10 or bracketed.
-float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, float tEnd, float tol, float eps,
-                 uint stepLimit, inout uint steps, out float tPast) {
+float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, float gate, float tEnd, float tol,
+                 float eps, uint stepLimit, bool countFirst, inout uint steps, out float tPast, out float sFirst) {
     tPast = t0;
-    if (s0 <= tol) return t0;  // on the surface, or inside (a ray that starts in a solid)
+    sFirst = s0;
     float ta = t0, sa = s0, tp = t0, sp = s0, tb = t0, sb = 0.0;
-    bool bracket = false, prev = false;
+    bool bracket = false, prev = false, pending = known;
     int side = 0;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
-    for (uint r = 0u; r < trace.counts.w && steps < stepLimit; ++r) {
+    // r = -1: the distance at t0 when the caller does not know it (the loop's one evaluation site:
+    // a CPU device runs every site of a loop at every iteration, so the search keeps a single one).
+    for (int r = known ? 0 : -1; r < int(trace.counts.w); ++r) {
+        if (pending) {
+            pending = false;
+            sFirst = sa;
+            if (sa >= gate) return -1.0;  // no candidate: farther than the gap to the best root
+            if (sa <= tol) return t0;  // on the surface, or inside (a ray that starts in a solid)
+        }
+        if (r >= 0 && steps >= stepLimit) break;
         if (bracket && tb - ta <= 1e-5 * tb) return ta;
         float tr;
-        if (bracket) {
+        if (r < 0) {
+            tr = t0;
+        } else if (bracket) {
             tr = side == -2 ? 0.5 * (ta + tb) : ta - sa * (tb - ta) / (sb - sa);
             if (!(tr > ta && tr < tb)) tr = 0.5 * (ta + tb);
         } else {
@@ -205,8 +216,14 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, float tEnd, flo
             tr = min(tr, tEnd);
         }
         float sr = sdfObjectDistance(obj, ro + rd * tr, 0.0);
-        ++steps;
         ++g_evaluations;
+        if (r >= 0 || countFirst) ++steps;
+        if (r < 0) {
+            sa = sr;
+            sp = sr;
+            pending = true;
+            continue;
+        }
         if (sr >= 0.0 && sr <= tol) return tr;
         if (sr < 0.0) {
             tb = tr;
@@ -230,6 +247,11 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, float tEnd, flo
             sa = sr;
             prev = true;
         }
+    }
+    if (pending) {  // refineSteps 0 (the loop ran only the first evaluation, or not at all)
+        sFirst = sa;
+        if (sa >= gate) return -1.0;
+        return t0;  // every candidate is a hit where it is
     }
     return bracket || sa <= 0.1 * eps ? ta : -1.0;
 }
@@ -382,62 +404,54 @@ void main() {
                 // within the step limit), not at the loop's end.
                 counted = 0u;
                 ++steps;
-                float raw = d;
-                if (safety > 0.0 && sdfObjectVoxel(nearest) > 0.0) {
-                    raw = sdfObjectDistance(nearest, ro + rd * t, 0.0);
-                    ++g_evaluations;
+                // The hit decision (objectRoot): the first root along the ray of each object that
+                // could be crossed before the best root so far — the candidate's object first (its
+                // raw distance: for a field evaluated by the search, for a shape the step's own;
+                // not below eps: no candidate, below zero: inside), then every candidate whose raw
+                // distance here is below the gap to that root (below eps while there is none). The
+                // earliest root is the hit, on its object; none is a near miss and the march goes
+                // on. One loop with one call, so the shader keeps one search (a CPU device runs
+                // every evaluation site of the march loop at every step).
+                float raw = d, nearPast = t, best = 3.0e38;
+                uint rootObject = 0xffffffffu;
+                bool inside = false;
+                float tol = max(kRootTolerance * eps, 1e-6 * t);
+                int count = int(candidateCount());
+                for (int i = -1; i < count; ++i) {
+                    if (i >= 0 && (trace.counts.w == 0u || steps >= stepLimit)) break;
+                    uint obj = i < 0 ? nearest : candidateObject(uint(max(i, 0)), t);
+                    float gap = rootObject != 0xffffffffu ? best - t : eps;
+                    if (i >= 0) {
+                        if (obj == nearest || obj == 0xffffffffu) continue;
+                        if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
+                    }
+                    bool known = i < 0 && !(safety > 0.0 && sdfObjectVoxel(nearest) > 0.0);
+                    float past, first;
+                    float tj = objectRoot(obj, ro, rd, t, d, known, gap, i < 0 ? tMax : min(best, tMax), tol, eps,
+                                          stepLimit, i >= 0, steps, past, first);
+                    if (i < 0) {
+                        raw = first;
+                        nearPast = past;
+                        inside = raw <= 0.0;
+                        if (inside || raw >= eps) break;
+                    }
+                    if (tj >= 0.0 && tj < best) {
+                        best = tj;
+                        rootObject = obj;
+                    }
                 }
-                if (raw <= 0.0) {
+                if (inside) {
                     // Inside the solid (a ray that starts inside, e.g. a camera in an object or
                     // behind the near plane's cut): a hit where it is.
                     hit = true;
                     hitObject = nearest;
                     break;
                 }
-                float nearPast = t;  // the nearest object has no root before (the hit decision)
-                if (raw < eps) {
-                    // A candidate: the hit decision (objectRoot). The first root along the ray of
-                    // each object that could be crossed before the best root so far: the nearest
-                    // object first, then every candidate whose raw distance here is below the gap
-                    // to that root (below eps when the nearest has none). The earliest root is the
-                    // hit, on its object; none is a near miss and the march goes on.
-                    uint rootObject = 0xffffffffu;
-                    float best = 3.0e38, past;
-                    if (trace.counts.w == 0u) {
-                        rootObject = nearest;  // no refinement: every candidate is a hit
-                        best = t;
-                    } else {
-                        float tol = max(kRootTolerance * eps, 1e-6 * t);
-                        float tn = objectRoot(nearest, ro, rd, t, raw, tMax, tol, eps, stepLimit, steps, nearPast);
-                        if (tn >= 0.0) {
-                            best = tn;
-                            rootObject = nearest;
-                        }
-                        bool one = false;
-                        uint count = candidateCount();
-                        for (uint i = 0u; i < count && steps < stepLimit; ++i) {
-                            uint obj = candidateObject(i, t);
-                            if (obj == nearest || obj == 0xffffffffu) continue;
-                            float gap = rootObject != 0xffffffffu ? best - t : eps;
-                            vec3 pl = sdfToLocal(obj, ro + rd * t);
-                            if (sdfBoxDistance(obj, pl) >= gap) continue;
-                            float sj = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, 0.0);
-                            ++steps;
-                            ++g_evaluations;
-                            if (sj >= gap) continue;
-                            float tj = objectRoot(obj, ro, rd, t, sj, min(best, tMax), tol, eps, stepLimit, steps, past);
-                            if (tj >= 0.0 && tj < best) {
-                                best = tj;
-                                rootObject = obj;
-                            }
-                        }
-                    }
-                    if (rootObject != 0xffffffffu) {
-                        hit = true;
-                        hitObject = rootObject;
-                        t = max(best, tMin);
-                        break;
-                    }
+                if (rootObject != 0xffffffffu) {
+                    hit = true;
+                    hitObject = rootObject;
+                    t = max(best, tMin);
+                    break;
                 }
                 // Not on the surface (yet): a plain step on the raw value (never past the other
                 // objects' safe distance), without over-relaxation from here on. A near miss stays
