@@ -27,7 +27,7 @@
 //
 // Acceleration (scene::AccelerationSettings; each toggle changes speed only: the hit decision does
 // not depend on where the march's samples land, so the picture stays within the parity rule of the
-// unaccelerated trace on analytic scenes; baked fields still differ on a few silhouette pixels:
+// unaccelerated trace (with baked fields and the world cache a few pixels still differ):
 // tests/renderer/sdf_accel_parity_test.cpp):
 //   culling         the pixel's tile list (SdfCullLists::primary on the blackboard, every traced
 //                   object without it) narrowed to the boxes the ray crosses; off: every traced

@@ -193,6 +193,9 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, flo
     sFirst = s0;
     float ta = t0, sa = s0, tp = t0, sp = s0, tb = t0, sb = 0.0;
     bool bracket = false, prev = false, pending = known;
+    // A field's interpolated distance bends at its trilinear cells: its secant steps go at most one
+    // voxel (or the plain step) at a time, so they do not overshoot the parts a cell resolves.
+    float voxel = sdfObjectVoxel(obj);
     int side = 0;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
     // r = -1: the distance at t0 when the caller does not know it (the loop's one evaluation site:
     // a CPU device runs every site of a loop at every iteration, so the search keeps a single one).
@@ -213,6 +216,7 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, flo
             if (!(tr > ta && tr < tb)) tr = 0.5 * (ta + tb);
         } else {
             tr = prev && sa < sp ? ta + sa * (ta - tp) / (sp - sa) : ta + sa;
+            if (voxel > 0.0) tr = min(tr, ta + max(sa, voxel));
             tr = min(tr, tEnd);
         }
         float sr = sdfObjectDistance(obj, ro + rd * tr, 0.0);
