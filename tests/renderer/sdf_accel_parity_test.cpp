@@ -24,6 +24,7 @@
 #include "engine/engine.h"
 #include "engine/scene/mesh_sdf.h"
 #include "renderer/scene_renderer.h"
+#include "support/accel_toggles.h"
 #include "support/golden.h"
 #include "support/test_device.h"
 
@@ -32,13 +33,8 @@ namespace {
 
 constexpr uint32_t kWidth = 160, kHeight = 90;
 
-struct Toggles {
-    const char* name;
-    bool culling, worldCache, idField;
-};
-
 // The reference first.
-const Toggles kToggles[] = {
+const AccelToggles kToggles[] = {
     {"none", false, false, false}, {"culling", true, false, false}, {"cache", false, true, false},
     {"id", false, false, true},    {"cache+id", false, true, true}, {"all", true, true, true},
 };
@@ -118,16 +114,14 @@ public:
         m_engine->update(0.0);
         return true;
     }
-    Frame render(rhi::Device& device, const Toggles& t) {
+    Frame render(rhi::Device& device, const AccelToggles& t) {
         Frame f;
         render::SceneRenderer renderer(device);
         render::FrameDesc frame;
         frame.width = kWidth;
         frame.height = kHeight;
         frame.settings = m_engine->settings();
-        frame.settings.acceleration.culling = t.culling;
-        frame.settings.acceleration.worldCache = t.worldCache;
-        frame.settings.acceleration.idField = t.idField;
+        t.applyTo(frame.settings.acceleration);
         frame.camera = scene::findCamera(m_engine->world(), m_engine->settings().camera);
         frame.aux = true;
         frame.auxEvaluations = true;
@@ -185,7 +179,7 @@ protected:
                     backend.c_str(), name, reference.objects, kWidth, kHeight, reference.meanEvaluations);
         double allEvaluations = 0.0;
         for (size_t i = 1; i < std::size(kToggles); ++i) {
-            const Toggles& t = kToggles[i];
+            const AccelToggles& t = kToggles[i];
             const bool idOrCulling = std::string(t.name) == "id" || std::string(t.name) == "culling";
             const bool holds = mode == Mode::Holds || (mode == Mode::IdAndCulling && idOrCulling);
             if (mode == Mode::IdAndCulling && !idOrCulling && std::string(t.name) != "all") continue;

@@ -44,6 +44,7 @@
 #include "engine/engine.h"
 #include "engine/scene/mesh_sdf.h"
 #include "renderer/scene_renderer.h"
+#include "support/accel_toggles.h"
 #include "support/golden.h"
 #include "support/test_device.h"
 
@@ -52,13 +53,8 @@ namespace {
 
 constexpr uint32_t kWidth = 160, kHeight = 90;
 
-struct Toggles {
-    const char* name;
-    bool culling, worldCache, idField;
-};
-
-const Toggles kOff{"off", false, false, false};
-const Toggles kAccelerated[] = {
+const AccelToggles kOff{"off", false, false, false};
+const AccelToggles kAccelerated[] = {
     {"culling", true, false, false},
     {"cache", false, true, false},
     {"ids", false, false, true},
@@ -166,16 +162,14 @@ std::string scenePath(const std::string& name) {
     return std::string(PENUMBRA_SOURCE_DIR "/scenes/") + name + ".json";
 }
 
-Frame renderFrame(rhi::Device& device, Engine& engine, const Toggles& t) {
+Frame renderFrame(rhi::Device& device, Engine& engine, const AccelToggles& t) {
     Frame f;
     render::SceneRenderer renderer(device);
     render::FrameDesc frame;
     frame.width = kWidth;
     frame.height = kHeight;
     frame.settings = engine.settings();
-    frame.settings.acceleration.culling = t.culling;
-    frame.settings.acceleration.worldCache = t.worldCache;
-    frame.settings.acceleration.idField = t.idField;
+    t.applyTo(frame.settings.acceleration);
     frame.settings.acceleration.prepass = false;
     frame.settings.shadows.resolutionScale = 1.0f;  // no upsampling: an effect pixel reads its own G-buffer
     frame.settings.ao.resolutionScale = 1.0f;
@@ -292,7 +286,7 @@ protected:
         const Frame off = renderFrame(dev(), *engine, kOff);
         ASSERT_TRUE(off.ok) << name << " off: " << off.error;
         EXPECT_FALSE(off.haveCounters) << name << ": culling off builds no effect lists";
-        for (const Toggles& t : kAccelerated) {
+        for (const AccelToggles& t : kAccelerated) {
             const Frame on = renderFrame(dev(), *engine, t);
             ASSERT_TRUE(on.ok) << name << " " << t.name << ": " << on.error;
             const std::vector<char> mask = sameGBuffer(off, on);
