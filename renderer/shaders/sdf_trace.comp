@@ -116,6 +116,20 @@ uint g_evaluations;  // object distance evaluations of this pixel (kCountEvalsFl
 
 uint tileObject(uint i) { return g_tileAll ? i : sdfTileIndices[g_tileFirst + i]; }
 
+// The objects a pixel's ray considers: its per-pixel list, its tile
+// list, or every traced object. candidateObject returns 0xffffffff for a list entry whose box the
+// ray had left before tFrom.
+uint candidateCount() {
+    bool cull = (trace.accel.x & kCullFlag) != 0u;
+    return cull ? (g_overflow ? g_tileCount : uint(g_count)) : trace.counts.x;
+}
+uint candidateObject(uint i, float tFrom) {
+    bool cull = (trace.accel.x & kCullFlag) != 0u;
+    if (!cull) return i;
+    if (g_overflow) return tileObject(i);
+    return tFrom > g_interval[i].y ? 0xffffffffu : g_list[i];
+}
+
 // Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
 // of the other objects' distances. `only` (the id field's object for p's cell, else 0xffffffff) is
 // the nearest object everywhere around p: it alone is evaluated and bounds the others too. With
@@ -131,11 +145,10 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
     nearest = 0xffffffffu;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
-    bool list = cull && !g_overflow;
-    uint count = one ? 1u : (list ? uint(g_count) : (cull ? g_tileCount : trace.counts.x));
+    uint count = one ? 1u : candidateCount();
     for (uint i = 0u; i < count; ++i) {
-        if (list && tFrom > g_interval[i].y) continue;  // the ray had left this box for good
-        uint obj = one ? only : (list ? g_list[i] : (cull ? tileObject(i) : i));
+        uint obj = one ? only : candidateObject(i, tFrom);
+        if (obj == 0xffffffffu) continue;  // the ray had left this box for good
         vec3 pl = sdfToLocal(obj, p);
         if (cull) {
             float box = sdfBoxDistance(obj, pl);
@@ -156,20 +169,6 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
     }
     if (one) second = d;  // the nearest everywhere in the cell: the others are at least as far
     return d;
-}
-
-// The objects a pixel's ray considers (as sceneDistance walks them): its per-pixel list, its tile
-// list, or every traced object. candidateObject returns 0xffffffff for a list entry whose box the
-// ray had left before tFrom.
-uint candidateCount() {
-    bool cull = (trace.accel.x & kCullFlag) != 0u;
-    return cull ? (g_overflow ? g_tileCount : uint(g_count)) : trace.counts.x;
-}
-uint candidateObject(uint i, float tFrom) {
-    bool cull = (trace.accel.x & kCullFlag) != 0u;
-    if (!cull) return i;
-    if (g_overflow) return tileObject(i);
-    return tFrom > g_interval[i].y ? 0xffffffffu : g_list[i];
 }
 
 // The hit decision for one object: the first root of its raw distance (an interpolated field without
