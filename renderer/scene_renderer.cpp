@@ -43,6 +43,7 @@
 #include "renderer/features/mesh_gbuffer.h"
 #include "renderer/features/scene_upload.h"
 #include "renderer/features/sdf_atlas.h"
+#include "renderer/features/sdf_box_trace.h"
 #include "renderer/features/sdf_cull.h"
 #include "renderer/features/sdf_effects_cull.h"
 #include "renderer/features/sdf_scene.h"
@@ -154,6 +155,8 @@ std::string entityName(ecs::Entity e) { return fmt::format("entity {}v{}", e.ind
 
 struct SceneRenderer::Impl {
     bool warnedPrepass = false;  // render.acceleration.prepass asked for once
+    scene::TraceMode lastTraceMode = scene::TraceMode::Fullscreen;  // the mode buildGraph ran
+    SdfBoxTraceReport lastBoxTrace;                                 // its draws (box mode)
     rhi::Device& device;
     std::string graphErrors;
     fg::FrameGraph graph;
@@ -885,7 +888,16 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
           g.albedo ? importTarget(kAlbedo) : fg::TextureRef{},
           frameNeedsAux(desc.aux, view) ? importTarget(kAux) : fg::TextureRef{}};
     uint64_t transientBytes = 0;
-    if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g));
+    // The trace mode (renderer/features/sdf_box_trace.h): `auto` by the object count and the boxes'
+    // screen coverage. The box trace tests against the mesh pass's depth, which it then keeps.
+    lastBoxTrace = {};
+    lastTraceMode = scene::TraceMode::Fullscreen;
+    const std::span<const GpuSdfObject> traced = std::span(sdfData.objects).first(sdfData.tracedCount);
+    if (g.tracedSdfs > 0)
+        lastTraceMode = resolveTraceMode(desc.settings.traceMode, traced, cam.view, cam.proj, cam.nearPlane,
+                                         cam.farPlane);
+    const bool boxTrace = lastTraceMode == scene::TraceMode::Box;
+    if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g), boxTrace);
     if (!g.sdfs.empty()) {
         addSdfSceneUpload(fc, sdfData, sdfStore);
         addWorldCache(fc, desc, cam);
@@ -898,10 +910,25 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         trace.accel = desc.settings.acceleration;
         trace.countEvaluations = desc.auxEvaluations;
         // Per-tile lists of the traced objects (the tiles debug view shows them whatever the toggle).
-        if (g.tracedSdfs > 0 && (desc.settings.acceleration.culling || view == DebugView::Tiles))
+        if (g.tracedSdfs > 0 &&
+            ((desc.settings.acceleration.culling && !boxTrace) || view == DebugView::Tiles))
             addSdfTileCull(fc, {std::span(sdfData.objects).first(sdfData.tracedCount), cam.view, cam.proj,
                                 cam.nearPlane, cam.farPlane});
-        if (g.tracedSdfs > 0) addSdfTrace(fc, trace);  // occluders only: the effects still see them
+        if (g.tracedSdfs > 0 && boxTrace) {
+            SdfBoxTraceDesc box;
+            box.settings = trace.settings;
+            box.raster = trace.raster;
+            box.nearPlane = trace.nearPlane;
+            box.farPlane = trace.farPlane;
+            box.footprint = trace.footprint;
+            box.countEvaluations = trace.countEvaluations;
+            box.objects = traced;
+            box.view = cam.view;
+            box.proj = cam.proj;
+            lastBoxTrace = addSdfBoxTrace(fc, box);
+        } else if (g.tracedSdfs > 0) {
+            addSdfTrace(fc, trace);  // occluders only: the effects still see them
+        }
         // Textured SDF materials: triplanar base colour and normal maps in object space.
         if (g.tracedSdfs > 0) addSdfSurface(fc, sdfSurfaceMaterials(g));
         if (g.effects.any()) {
@@ -1026,6 +1053,11 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
         st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
     }
     keptBuffers.clear();
+    // The SDF object array (GpuSdfObject per object, traced first) for readBuffer: the box-trace
+    // tests check written depth against each object's bounds box.
+    if (const SdfSceneBuffers* sb = board.find<SdfSceneBuffers>(); sb && !sdfData.objects.empty())
+        keptBuffers["sdf.objects"] = {graph.physicalBuffer(sb->objects),
+                                      uint64_t(sdfData.objects.size()) * sizeof(GpuSdfObject)};
     if (const SdfCullLists* lists = board.find<SdfCullLists>()) {
         for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao}) st.tileListBytes += l->bytes;
         if (lists->primary.valid()) {
@@ -1036,6 +1068,9 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
         }
     }
     st.triangles = triangles;
+    st.traceMode = lastTraceMode;
+    st.boxDraws = lastBoxTrace.boxes;
+    st.nearDraws = lastBoxTrace.nearDraws;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
     // The shadow / AO tile lists and their counters for readBuffer (features/sdf_effects_cull.h).

@@ -119,6 +119,12 @@ struct FrameStats {
     uint32_t lights = 0;
     uint32_t materials = 0;
     uint64_t tileListBytes = 0;  // per-tile object lists (renderer/features/sdf_cull.h), all kinds
+    // The trace mode that ran (scene::TraceMode Fullscreen or Box; `auto` resolved), and the
+    // objects the box trace drew as boxes / as near-plane triangles (inside or crossing the near
+    // plane, unbounded). Fullscreen when the frame traced no SDF object.
+    scene::TraceMode traceMode = scene::TraceMode::Fullscreen;
+    uint32_t boxDraws = 0;
+    uint32_t nearDraws = 0;
 };
 
 struct FrameDesc {
@@ -168,7 +174,8 @@ public:
     // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices" (the
     // primary tile lists, renderer/features/sdf_cull.h, when the frame built them), and with the
     // shadow / AO lists (renderer/features/sdf_effects_cull.h) "sdf.shadow_tile_ranges",
-    // "sdf.ao_tile_ranges", "sdf.effects_tile_indices", "sdf.effects_cull_counters"; false otherwise.
+    // "sdf.ao_tile_ranges", "sdf.effects_tile_indices", "sdf.effects_cull_counters", and
+    // "sdf.objects" (the frame's GpuSdfObject array, renderer/features/sdf_scene.h); false otherwise.
     bool readBuffer(const std::string& name, std::vector<uint8_t>& bytes, std::string& error);
 
     // The last frame's statistics; its pass timings are waited for if they have not arrived yet

@@ -81,6 +81,27 @@ bool parseTraceQuality(std::string_view text, TraceQuality& out) {
     return false;
 }
 
+const char* toString(TraceMode mode) {
+    switch (mode) {
+        case TraceMode::Fullscreen:
+            return "fullscreen";
+        case TraceMode::Box:
+            return "box";
+        case TraceMode::Auto:
+            return "auto";
+    }
+    return "fullscreen";
+}
+
+bool parseTraceMode(std::string_view text, TraceMode& out) {
+    for (TraceMode m : {TraceMode::Fullscreen, TraceMode::Box, TraceMode::Auto})
+        if (text == toString(m)) {
+            out = m;
+            return true;
+        }
+    return false;
+}
+
 TraceSettings tracePreset(TraceQuality quality) {
     TraceSettings s;  // medium
     switch (quality) {

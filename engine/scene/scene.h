@@ -144,6 +144,16 @@ enum class MeshSdfMode : uint8_t {
     Auto        // Occlusion when the frame has effects (shadowed lights or AO) and meshes, else Off
 };
 
+// How the SDF objects reach the G-buffer (issue 14; `--trace-mode`, the render block's "traceMode";
+// renderer/features/sdf_box_trace.h).
+enum class TraceMode : uint8_t {
+    Fullscreen,  // one compute invocation per pixel traces every object (sdf_trace)
+    Box,         // each object's bounds box is rasterized and traced in its own field (sdf_box_trace)
+    Auto         // Box or Fullscreen by the measured crossover (object count, screen coverage)
+};
+bool parseTraceMode(std::string_view text, TraceMode& out);
+const char* toString(TraceMode mode);
+
 // ---- acceleration (issue 13: renderer/features/sdf_cull.h, sdf_world_cache.h) -------------------
 // Each toggle only changes speed: the picture matches the unaccelerated render within the parity
 // rule (tests). `render.acceleration` in the scene JSON, `--accel` on the CLI (docs/FORMATS.md).
@@ -179,6 +189,8 @@ struct RenderSettings {
     ReflectionSettings reflections;
     MeshSdfMode meshSdf = MeshSdfMode::Auto;  // --mesh-sdf replaces it
     AccelerationSettings acceleration;        // --accel replaces the toggles
+    // How SDF objects are traced (render.traceMode); --trace-mode replaces it.
+    TraceMode traceMode = TraceMode::Fullscreen;
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };

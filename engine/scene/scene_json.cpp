@@ -540,7 +540,7 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
                                       {"width", "height", "shading", "toneMapper", "exposure", "ambient",
                                        "ambientSky", "background", "camera", "fixedDt", "quality", "trace",
                                        "debugView", "slice", "shadows", "ao", "reflections", "meshSdf",
-                                       "acceleration"},
+                                       "acceleration", "traceMode"},
                                       "render settings")) {
         return false;
     }
@@ -610,6 +610,11 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!parseReflections(value, p, s.reflections)) return false;
         } else if (key == "acceleration") {
             if (!parseAcceleration(value, p, s.acceleration)) return false;
+        } else if (key == "traceMode") {
+            std::string name;
+            if (!string(value, p, name)) return false;
+            if (!parseTraceMode(name, s.traceMode))
+                return fail(p, fmt::format("unknown traceMode '{}' (expected fullscreen, box or auto)", name));
         } else if (key == "meshSdf") {
             std::string name;
             if (!string(value, p, name)) return false;

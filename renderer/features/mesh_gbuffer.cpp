@@ -48,7 +48,7 @@ rhi::ColorAttachment cleared(rhi::TextureHandle texture, std::array<float, 4> va
 
 }  // namespace
 
-uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
+uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws, bool keepDepth) {
     struct Data {
         GBuffer gb;
         SceneBuffers scene;
@@ -76,6 +76,7 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
                  {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo, d.gb.aux})
                 if (t.isValid()) b.write(t, rhi::Access::ColorTarget);
             d.depth = b.write(b.createTexture("depth", depthDesc), rhi::Access::DepthTargetWrite);
+            if (keepDepth) fc.board.add<MeshDepth>().depth = d.depth;
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.objects, rhi::Access::ShaderRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
@@ -85,7 +86,8 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
                 if (albedo) b.read(draw.baseColor, rhi::Access::ShaderSampled);
             }
         },
-        [&cache = fc.cache, &vs, &fs, pipeline, sampler, albedo](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &vs, &fs, pipeline, sampler, albedo, keepDepth](const Data& d,
+                                                                            fg::PassContext& ctx) {
             rhi::RenderPassDesc rp;
             rp.colorAttachments = {
                 cleared(ctx.texture(d.gb.depth), {0, 0, 0, 0}),  // depth 0: nothing hit
@@ -98,7 +100,7 @@ uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws) {
                     cleared(ctx.texture(d.gb.aux), {-1, 0, 0, 0}));  // background id
             rp.depthAttachment.texture = ctx.texture(d.depth);
             rp.depthAttachment.load = rhi::LoadOp::Clear;
-            rp.depthAttachment.store = rhi::StoreOp::DontCare;
+            rp.depthAttachment.store = keepDepth ? rhi::StoreOp::Store : rhi::StoreOp::DontCare;
             rp.depthAttachment.clearDepth = 1.0f;
             rp.debugName = "gbuffer_mesh";
             const rhi::TextureDesc& size = ctx.textureDesc(d.depth);

@@ -22,8 +22,15 @@ struct MeshDraw {
     fg::TextureRef baseColor;  // albedo variant: the material's texture (or white); else invalid
 };
 
+// The pass's hardware depth buffer (D32, the projection's depth of the nearest mesh, cleared to 1),
+// published on the blackboard when keepDepth is set: the box trace (sdf_box_trace.h) tests against
+// it and writes it, so meshes and box-traced SDF objects occlude each other.
+struct MeshDepth {
+    fg::TextureRef depth;
+};
+
 // Adds the pass (clears and writes every GBuffer target). Returns the bytes of its transient
-// depth buffer.
-uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws);
+// depth buffer. keepDepth: store the depth buffer and publish it (MeshDepth) for a later raster pass.
+uint64_t addMeshGBuffer(FrameContext& fc, std::vector<MeshDraw> draws, bool keepDepth = false);
 
 }  // namespace penumbra::render

@@ -478,6 +478,8 @@ BenchCommands addBenchCommand(CLI::App& app, BenchTraceOptions& opt) {
     out.accuracy = addBenchAccuracyCommand(*out.group, *out.accuracyOptions);
     out.objectsOptions = std::make_shared<BenchObjectsOptions>();
     out.objects = addBenchObjectsCommand(*out.group, *out.objectsOptions);
+    out.traceModesOptions = std::make_shared<BenchTraceModesOptions>();
+    out.traceModes = addBenchTraceModesCommand(*out.group, *out.traceModesOptions);
     return out;
 }
 

@@ -13,6 +13,8 @@
 //   bench accuracy [--scenes a.json,...] [...] -o DIR   speed against error (cmd_bench_accuracy.h)
 //   bench objects [--counts 20,40,60,80] [...]          mTec Table 2: cost against object count and
 //                                                       acceleration toggles (bench_objects.h)
+//   bench trace-modes [--counts 20,...,1000] [...]     mTec Table 7: full-screen vs box tracing
+//                                                       against object count (bench_trace_modes.h)
 // Exit codes: 0 ok, 1 runtime error (bad scene, device failure, unwritable output), 2 usage.
 #pragma once
 
@@ -23,6 +25,7 @@
 #include <CLI/CLI.hpp>
 
 #include "bench_objects.h"
+#include "bench_trace_modes.h"
 #include "cmd_bench_accuracy.h"
 
 namespace penumbra::cli {
@@ -47,6 +50,9 @@ struct BenchCommands {
     CLI::App* trace = nullptr;     // `bench trace`
     CLI::App* accuracy = nullptr;  // `bench accuracy` (cmd_bench_accuracy.h)
     CLI::App* objects = nullptr;   // `bench objects` (bench_objects.h)
+    // `bench trace-modes` (bench_trace_modes.h)
+    CLI::App* traceModes = nullptr;
+    std::shared_ptr<BenchTraceModesOptions> traceModesOptions;
     std::shared_ptr<BenchAccuracyOptions> accuracyOptions;
     std::shared_ptr<BenchObjectsOptions> objectsOptions;
 };

@@ -105,6 +105,11 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                     {"thickness", stats.effects.thickness},       {"reflection", stats.effects.reflection},
                     {"targetBytes", stats.effects.targetBytes},   {"lowResBytes", stats.effects.lowResBytes}};
     j["tileListBytes"] = stats.tileListBytes;
+    // The SDF trace mode that ran (render.traceMode / --trace-mode, `auto` resolved) and the box
+    // trace's draws (renderer/features/sdf_box_trace.h).
+    j["traceMode"] = {{"ran", scene::toString(stats.traceMode)},
+                      {"boxDraws", stats.boxDraws},
+                      {"nearPlaneDraws", stats.nearDraws}};
     const render::WorldCacheReport& wc = stats.worldCache;  // renderer/features/sdf_world_cache.h
     j["worldCache"] = {{"active", wc.active},
                        {"levels", wc.levels},
@@ -218,6 +223,13 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "the scene's render.ao.variant; docs/FORMATS.md)")
         ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
     addAccelOption(cmd, opt.accel);
+    cmd->add_option("--trace-mode", opt.traceMode,
+                    "How SDF objects are traced: fullscreen (one compute invocation per pixel over every "
+                    "object) | box (each object's bounds box is rasterized and traced in its own field, "
+                    "conservative depth) | auto (box from the measured crossover: enough objects, small "
+                    "screen coverage; docs/BENCHMARKS.md); replaces the scene's render.traceMode "
+                    "(default fullscreen). --stats reports the mode that ran")
+        ->check(CLI::IsMember({"fullscreen", "box", "auto"}));
     return cmd;
 }
 
@@ -232,6 +244,7 @@ bool applySceneOverrides(const RenderOptions& opt, const glm::vec4& slice, Engin
     if (!opt.shading.empty()) scene::parseShadingModel(opt.shading, settings.shading);
     if (!opt.toneMapper.empty()) scene::parseToneMapper(opt.toneMapper, settings.toneMapper);
     if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, settings.quality);
+    if (!opt.traceMode.empty()) scene::parseTraceMode(opt.traceMode, settings.traceMode);
     if (!opt.shadows.empty()) {
         settings.shadows.enabled = opt.shadows != "off";
         settings.shadows.hard = opt.shadows == "hard";

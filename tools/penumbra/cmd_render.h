@@ -37,6 +37,7 @@ struct RenderOptions {
                                   // ids | field-slice
     std::string slice;            // --slice AXIS=OFFSET | NX,NY,NZ,OFFSET; empty: the scene's
     std::string aov;              // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
+    std::string traceMode;        // --trace-mode fullscreen|box|auto; empty: the scene's
     std::string accel;            // --accel all | none | culling,cache,id,prepass; empty: the scene's
 };
 

@@ -8,6 +8,7 @@
 //   penumbra bench trace [scene] [...]        benchmarks for docs/BENCHMARKS.md (cmd_bench.cpp)
 //   penumbra bench accuracy -o DIR [...]      speed against error (cmd_bench_accuracy.cpp)
 //   penumbra bench objects [...]              cost against object count (bench_objects.cpp)
+//   penumbra bench trace-modes [...]          full-screen vs box tracing (bench_trace_modes.cpp)
 // Global flags (-v, --version, --help) are accepted before or after the subcommand. Every command
 // checks its inputs, outputs, backend and image size before the work and writes its outputs all or
 // nothing (cli_common.h, engine/core/output_file.h).
@@ -250,5 +251,6 @@ int main(int argc, char** argv) {
     if (bench.trace->parsed()) return penumbra::cli::runBenchTrace(benchTraceOpt);
     if (bench.accuracy->parsed()) return penumbra::cli::runBenchAccuracy(*bench.accuracyOptions);
     if (bench.objects->parsed()) return penumbra::cli::runBenchObjects(*bench.objectsOptions);
+    if (bench.traceModes->parsed()) return penumbra::cli::runBenchTraceModes(*bench.traceModesOptions);
     return 2;
 }
