@@ -157,6 +157,7 @@ struct SceneRenderer::Impl {
     bool warnedPrepass = false;  // render.acceleration.prepass asked for once
     scene::TraceMode lastTraceMode = scene::TraceMode::Fullscreen;  // the mode buildGraph ran
     SdfBoxTraceReport lastBoxTrace;                                 // its draws (box mode)
+    double lastBoxCoverage = 0.0;                                   // boxCoverage of the traced objects
     rhi::Device& device;
     std::string graphErrors;
     fg::FrameGraph graph;
@@ -893,9 +894,9 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     lastBoxTrace = {};
     lastTraceMode = scene::TraceMode::Fullscreen;
     const std::span<const GpuSdfObject> traced = std::span(sdfData.objects).first(sdfData.tracedCount);
-    if (g.tracedSdfs > 0)
-        lastTraceMode = resolveTraceMode(desc.settings.traceMode, traced, cam.view, cam.proj, cam.nearPlane,
-                                         cam.farPlane);
+    lastBoxCoverage =
+        g.tracedSdfs > 0 ? boxCoverage(traced, cam.view, cam.proj, cam.nearPlane, cam.farPlane) : 0.0;
+    if (g.tracedSdfs > 0) lastTraceMode = resolveTraceMode(desc.settings.traceMode, g.tracedSdfs, lastBoxCoverage);
     const bool boxTrace = lastTraceMode == scene::TraceMode::Box;
     if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g), boxTrace);
     if (!g.sdfs.empty()) {
@@ -1071,6 +1072,7 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.traceMode = lastTraceMode;
     st.boxDraws = lastBoxTrace.boxes;
     st.nearDraws = lastBoxTrace.nearDraws;
+    st.boxCoverage = lastBoxCoverage;
     st.lights = uint32_t(g.lights.size());
     st.materials = uint32_t(g.materials.size());
     // The shadow / AO tile lists and their counters for readBuffer (features/sdf_effects_cull.h).

@@ -8,6 +8,9 @@
 //                              incrementally (renderer/features/sdf_world_cache.h; acceleration)
 //   sdf_trace      (compute)   sphere tracing of the SdfRenderer entities into the same G-buffer,
 //                              bounded by the mesh depth (hybrid)
+//   sdf_box_trace  (raster)    instead of sdf_trace with render.traceMode box (or auto's choice):
+//                              each object's bounds box rasterized and traced alone, depth-tested
+//                              against the mesh pass's depth (renderer/features/sdf_box_trace.h)
 //   sdf_surface    (compute)   textured SDF materials: triplanar albedo and normal maps in object
 //                              space, one dispatch per material (renderer/features/sdf_surface.h)
 //   effects        (compute)   sdf_shadow, sdf_ao, sdf_thickness, sdf_reflection, effects_upsample
@@ -125,6 +128,7 @@ struct FrameStats {
     scene::TraceMode traceMode = scene::TraceMode::Fullscreen;
     uint32_t boxDraws = 0;
     uint32_t nearDraws = 0;
+    double boxCoverage = 0.0;  // the traced objects' boxes in screens (sdf_box_trace.h boxCoverage)
 };
 
 struct FrameDesc {

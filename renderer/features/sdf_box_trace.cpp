@@ -94,18 +94,21 @@ std::vector<const rhi::ShaderDesc*> sdfBoxTraceFragmentStages() {
     return out;
 }
 
-scene::TraceMode resolveTraceMode(scene::TraceMode requested, std::span<const GpuSdfObject> objects,
-                                  const glm::mat4& view, const glm::mat4& proj, float nearPlane,
-                                  float farPlane) {
-    if (requested != scene::TraceMode::Auto) return requested;
-    if (objects.size() < kAutoBoxMinObjects) return scene::TraceMode::Fullscreen;
+double boxCoverage(std::span<const GpuSdfObject> objects, const glm::mat4& view, const glm::mat4& proj,
+                   float nearPlane, float farPlane) {
     double coverage = 0.0;
     for (const GpuSdfObject& o : objects) {
         double c = 0.0;
         classifyBoxDraw(o, view, proj, nearPlane, farPlane, &c);
         coverage += c;
     }
-    return coverage <= kAutoBoxMaxCoverage ? scene::TraceMode::Box : scene::TraceMode::Fullscreen;
+    return coverage;
+}
+
+scene::TraceMode resolveTraceMode(scene::TraceMode requested, uint32_t objects, double coverage) {
+    if (requested != scene::TraceMode::Auto) return requested;
+    return objects <= kAutoBoxMaxObjects && coverage <= kAutoBoxMaxCoverage ? scene::TraceMode::Box
+                                                                            : scene::TraceMode::Fullscreen;
 }
 
 SdfBoxTraceReport addSdfBoxTrace(FrameContext& fc, const SdfBoxTraceDesc& desc) {

@@ -62,15 +62,21 @@ enum class BoxDraw : uint8_t { Box, Near, Skip };
 BoxDraw classifyBoxDraw(const GpuSdfObject& object, const glm::mat4& view, const glm::mat4& proj,
                         float nearPlane, float farPlane, double* coverage = nullptr);
 
-// The mode a frame runs: Fullscreen and Box as asked; Auto picks Box when the frame has at least
-// kAutoBoxMinObjects traced objects and the boxes cover at most kAutoBoxMaxCoverage screens (summed
-// screen rectangles, near-plane and unbounded objects counting a full screen each), else
-// Fullscreen. The numbers come from `penumbra bench trace-modes` (docs/BENCHMARKS.md).
-inline constexpr uint32_t kAutoBoxMinObjects = 60;
-inline constexpr double kAutoBoxMaxCoverage = 4.0;
-scene::TraceMode resolveTraceMode(scene::TraceMode requested, std::span<const GpuSdfObject> objects,
-                                  const glm::mat4& view, const glm::mat4& proj, float nearPlane,
-                                  float farPlane);
+// The boxes' summed screen-rectangle fractions (classifyBoxDraw's coverage: near-plane and
+// unbounded objects one screen each, skipped ones 0): the overdraw box mode pays for.
+double boxCoverage(std::span<const GpuSdfObject> objects, const glm::mat4& view, const glm::mat4& proj,
+                   float nearPlane, float farPlane);
+
+// The mode a frame runs: Fullscreen and Box as asked; Auto picks Box when the frame traces at most
+// kAutoBoxMaxObjects objects whose boxes cover at most kAutoBoxMaxCoverage screens (boxCoverage),
+// else Fullscreen. The numbers are this project's measurements (docs/BENCHMARKS.md, "Full-screen
+// vs box tracing"; llvmpipe, both backends): on the objects scene (1.1-1.5 screens) box tracing was
+// faster up to 100-200 objects, about even at 200 and slower at 1000 — the reverse of the thesis's
+// GPU, where box tracing overtakes from ~60 objects; box was also faster on shapes.json (1.5
+// screens) and default.json (2.7 screens). Larger coverage was not measured: full-screen there.
+inline constexpr uint32_t kAutoBoxMaxObjects = 200;
+inline constexpr double kAutoBoxMaxCoverage = 3.0;
+scene::TraceMode resolveTraceMode(scene::TraceMode requested, uint32_t objects, double coverage);
 
 // The fragment stage of every variant of the pass's program (tests: the depth_greater declaration).
 std::vector<const rhi::ShaderDesc*> sdfBoxTraceFragmentStages();

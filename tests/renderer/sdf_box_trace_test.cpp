@@ -388,20 +388,40 @@ TEST(BoxTraceBackends, VulkanMatchesOpenGL) {
     EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
 }
 
-// Auto: few objects stay full-screen; the 200-object scene (small boxes) goes to boxes.
-TEST_P(BoxTrace, AutoPicksByObjectCount) {
-    BoxScene small;
+// Auto (sdf_box_trace.h resolveTraceMode): box up to kAutoBoxMaxObjects objects covering at most
+// kAutoBoxMaxCoverage screens, else full-screen; explicit modes are kept.
+TEST(BoxTraceAuto, RuleFromTheCrossover) {
+    using scene::TraceMode;
+    EXPECT_EQ(render::resolveTraceMode(TraceMode::Fullscreen, 20, 0.5), TraceMode::Fullscreen);
+    EXPECT_EQ(render::resolveTraceMode(TraceMode::Box, 5000, 50.0), TraceMode::Box);
+    EXPECT_EQ(render::resolveTraceMode(TraceMode::Auto, render::kAutoBoxMaxObjects, 1.0), TraceMode::Box);
+    EXPECT_EQ(render::resolveTraceMode(TraceMode::Auto, render::kAutoBoxMaxObjects + 1, 1.0),
+              TraceMode::Fullscreen);
+    EXPECT_EQ(render::resolveTraceMode(TraceMode::Auto, 20, render::kAutoBoxMaxCoverage + 0.5),
+              TraceMode::Fullscreen);
+}
+
+// Auto in a frame: the stats report the mode the rule picks for the frame's objects and coverage,
+// and that mode's passes ran.
+TEST_P(BoxTrace, AutoReportsTheModeThatRan) {
+    BoxScene sc;
     std::string error;
-    ASSERT_TRUE(small.load(PENUMBRA_SOURCE_DIR "/scenes/shapes.json", error)) << error;
-    Frame f = small.render(dev(), scene::TraceMode::Auto);
+    ASSERT_TRUE(sc.load(PENUMBRA_SOURCE_DIR "/scenes/shapes.json", error)) << error;
+    Frame f = sc.render(dev(), scene::TraceMode::Auto);
     ASSERT_TRUE(f.ok) << f.error;
-    EXPECT_EQ(f.stats.traceMode, scene::TraceMode::Fullscreen);
-    if (!haveMeshes()) return;
-    BoxScene many;
-    ASSERT_TRUE(many.load(objects200Path(), error)) << error;
-    Frame g = many.render(dev(), scene::TraceMode::Auto);
-    ASSERT_TRUE(g.ok) << g.error;
-    EXPECT_EQ(g.stats.traceMode, scene::TraceMode::Box);
+    EXPECT_GT(f.stats.boxCoverage, 0.0);
+    const scene::TraceMode expected =
+        render::resolveTraceMode(scene::TraceMode::Auto, f.stats.sdfObjects, f.stats.boxCoverage);
+    EXPECT_EQ(f.stats.traceMode, expected);
+    bool box = false, full = false;
+    for (const fg::PassTiming& p : f.stats.passes) {
+        box = box || p.name == "sdf_box_trace";
+        full = full || p.name == "sdf_trace";
+    }
+    EXPECT_EQ(box, expected == scene::TraceMode::Box);
+    EXPECT_EQ(full, expected == scene::TraceMode::Fullscreen);
+    std::printf("[%s] shapes, auto: %u objects, coverage %.2f screens -> %s\n", backendOf(GetParam()).c_str(),
+                f.stats.sdfObjects, f.stats.boxCoverage, scene::toString(f.stats.traceMode));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, BoxTrace, testing::ValuesIn(gpuBackends()), backendName);

@@ -36,6 +36,7 @@ struct Series {
 
 struct Row {
     uint32_t count = 0, sdfObjects = 0, boxDraws = 0, nearDraws = 0;
+    double coverage = 0.0;  // the boxes' summed screen fractions (FrameStats::boxCoverage)
     Series modes[2];
 };
 
@@ -131,6 +132,7 @@ int runCount(const BenchTraceModesOptions& opt, rhi::Backend backend, uint32_t c
             if (m == 1) {
                 row.boxDraws = renderer->stats().boxDraws;
                 row.nearDraws = renderer->stats().nearDraws;
+                row.coverage = renderer->stats().boxCoverage;
             }
             row.sdfObjects = renderer->stats().sdfObjects;
             sink.tags.push_back(f < opt.warmup ? -1 : m);
@@ -170,14 +172,14 @@ std::string markdown(const BenchTraceModesOptions& opt, const std::vector<Table>
         md += fmt::format("**{}** ({}); median GPU ms, shadows and AO off:\n\n", rhi::toString(t.backend),
                           t.device);
         md +=
-            "| N | SDF objects | boxes / near-plane draws | fullscreen trace | box trace | box / fullscreen "
-            "| "
-            "fullscreen frame | box frame |\n|---|---|---|---|---|---|---|---|\n";
+            "| N | SDF objects | boxes / near-plane draws | coverage (screens) | fullscreen trace | box "
+            "trace | "
+            "box / fullscreen | fullscreen frame | box frame |\n|---|---|---|---|---|---|---|---|---|\n";
         for (const Row& r : t.rows) {
             const double ft = median(r.modes[0].trace), bt = median(r.modes[1].trace);
-            md += fmt::format("| {} | {} | {} / {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} |\n", r.count,
-                              r.sdfObjects, r.boxDraws, r.nearDraws, ft, bt, ratio(bt, ft),
-                              median(r.modes[0].frame), median(r.modes[1].frame));
+            md += fmt::format("| {} | {} | {} / {} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} | {:.2f} |\n",
+                              r.count, r.sdfObjects, r.boxDraws, r.nearDraws, r.coverage, ft, bt,
+                              ratio(bt, ft), median(r.modes[0].frame), median(r.modes[1].frame));
         }
         md += fmt::format("\nBox trace faster at N = {}; full-screen faster at N = {}.\n\n", faster(t, true),
                           faster(t, false));

@@ -109,7 +109,8 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
     // trace's draws (renderer/features/sdf_box_trace.h).
     j["traceMode"] = {{"ran", scene::toString(stats.traceMode)},
                       {"boxDraws", stats.boxDraws},
-                      {"nearPlaneDraws", stats.nearDraws}};
+                      {"nearPlaneDraws", stats.nearDraws},
+                      {"coverage", jsonNumber(stats.boxCoverage)}};
     const render::WorldCacheReport& wc = stats.worldCache;  // renderer/features/sdf_world_cache.h
     j["worldCache"] = {{"active", wc.active},
                        {"levels", wc.levels},
@@ -224,10 +225,11 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
     addAccelOption(cmd, opt.accel);
     cmd->add_option("--trace-mode", opt.traceMode,
-                    "How SDF objects are traced: fullscreen (one compute invocation per pixel over every "
-                    "object) | box (each object's bounds box is rasterized and traced in its own field, "
-                    "conservative depth) | auto (box from the measured crossover: enough objects, small "
-                    "screen coverage; docs/BENCHMARKS.md); replaces the scene's render.traceMode "
+                    "How SDF objects are traced: fullscreen (one compute invocation per pixel over its tile's "
+                    "objects) | box (each object's bounds box is rasterized and traced in that object alone, "
+                    "conservative depth) | auto (box for at most 200 objects whose boxes cover at most 3 "
+                    "screens, else fullscreen: the crossover measured here, docs/BENCHMARKS.md); replaces the "
+                    "scene's render.traceMode "
                     "(default fullscreen). --stats reports the mode that ran")
         ->check(CLI::IsMember({"fullscreen", "box", "auto"}));
     return cmd;
