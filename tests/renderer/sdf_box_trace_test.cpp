@@ -101,6 +101,25 @@ std::string nearScenePath() {
                                  R"(, "trace": {"maxSteps": 256})"));
 }
 
+// Rasterized meshes with box-traced objects (they occlude each other through the shared hardware
+// depth): a mesh box in front of the SDF crate and a mesh sphere behind the SDF ball, each hiding
+// part of the other; `cut`: the mesh box cuts into the SDF ball beside its silhouette instead.
+std::string meshScenePath(bool cut) {
+    const std::string box = cut ? R"({"position": [-0.45, 0.55, -2.7], "eulerDegrees": [20, 35, 0]})"
+                                : R"({"position": [0.55, 0.5, -1.7], "eulerDegrees": [20, 35, 0]})";
+    return writeScene(
+        cut ? "box_trace_mesh_cut.json" : "box_trace_mesh.json",
+        smallScene(R"({"name": "main", "transform": {"position": [0, 1.2, 0.5], "eulerDegrees": [-15, 0, 0]},
+     "camera": {"fovYDegrees": 60, "near": 0.1, "far": 40}})",
+                   R"(,
+    {"name": "mesh box", "transform": )" +
+                       box + R"(,
+     "mesh": {"primitive": {"shape": "box", "halfExtents": 0.3}, "material": "blue"}},
+    {"name": "mesh ball", "transform": {"position": [)" +
+                       std::string(cut ? "0.2, 0.35, -3.6" : "-1.45, 0.6, -3.9") + R"(]},
+     "mesh": {"primitive": {"shape": "sphere", "radius": 0.3}, "material": "red"}})"));
+}
+
 std::string objects200Path() {
     scene::ObjectsSceneDesc d;
     d.count = 200;
@@ -285,6 +304,20 @@ TEST_P(BoxTrace, BoxCrossesNearPlane) {
         EXPECT_TRUE(failure.empty()) << failure;
     }
 }
+
+TEST_P(BoxTrace, MeshesAndBoxes) {
+    Frame box = parity("mesh", meshScenePath(false));
+    EXPECT_GT(box.stats.drawCalls, 0u);
+}
+
+// KNOWN GAP: a mesh box cutting into the SDF ball right behind the ball's silhouette. On a vertical
+// run of pixels there the full-screen trace, whose rays end at the mesh depth, shows the mesh where
+// box mode finds the ball's surface up to 0.13 units in front of it (measured at 160x90, both
+// backends: 17 px (0.12 %) over 5/255, max 197/255). The full-screen hit decision's secant step is
+// clamped to the ray's end (the mesh depth) and crosses the thin sliver of the ball in front of the
+// mesh to a point outside it, which reads as a near miss; box mode's rays end at the far plane and
+// the hardware depth test orders ball and mesh. Disabled, not loosened.
+TEST_P(BoxTrace, DISABLED_MeshCutsSilhouette) { parity("mesh_cut", meshScenePath(true)); }
 
 // The written linear depth against the CPU's ray/box entry of the hit object's box (double
 // precision; rays as the renderer casts them, linear depth = t for a ray with unit forward
