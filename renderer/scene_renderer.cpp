@@ -896,7 +896,8 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     const std::span<const GpuSdfObject> traced = std::span(sdfData.objects).first(sdfData.tracedCount);
     lastBoxCoverage =
         g.tracedSdfs > 0 ? boxCoverage(traced, cam.view, cam.proj, cam.nearPlane, cam.farPlane) : 0.0;
-    if (g.tracedSdfs > 0) lastTraceMode = resolveTraceMode(desc.settings.traceMode, g.tracedSdfs, lastBoxCoverage);
+    if (g.tracedSdfs > 0)
+        lastTraceMode = resolveTraceMode(desc.settings.traceMode, g.tracedSdfs, lastBoxCoverage);
     const bool boxTrace = lastTraceMode == scene::TraceMode::Box;
     if (!g.sources.empty()) transientBytes = addMeshGBuffer(fc, importDraws(g), boxTrace);
     if (!g.sdfs.empty()) {

@@ -614,7 +614,8 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             std::string name;
             if (!string(value, p, name)) return false;
             if (!parseTraceMode(name, s.traceMode))
-                return fail(p, fmt::format("unknown traceMode '{}' (expected fullscreen, box or auto)", name));
+                return fail(p,
+                            fmt::format("unknown traceMode '{}' (expected fullscreen, box or auto)", name));
         } else if (key == "meshSdf") {
             std::string name;
             if (!string(value, p, name)) return false;

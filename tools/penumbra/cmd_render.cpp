@@ -225,12 +225,12 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"off", "five-tap", "multi-ray", "cones"}));
     addAccelOption(cmd, opt.accel);
     cmd->add_option("--trace-mode", opt.traceMode,
-                    "How SDF objects are traced: fullscreen (one compute invocation per pixel over its tile's "
-                    "objects) | box (each object's bounds box is rasterized and traced in that object alone, "
-                    "conservative depth) | auto (box for at most 200 objects whose boxes cover at most 3 "
-                    "screens, else fullscreen: the crossover measured here, docs/BENCHMARKS.md); replaces the "
-                    "scene's render.traceMode "
-                    "(default fullscreen). --stats reports the mode that ran")
+                    "How SDF objects are traced: fullscreen (one compute invocation per pixel over its "
+                    "tile's objects) | box (each object's bounds box is rasterized and traced in that "
+                    "object alone, conservative depth) | auto (box for at most 200 objects whose boxes "
+                    "cover at most 3 screens, else fullscreen: the crossover measured here, "
+                    "docs/BENCHMARKS.md); replaces the scene's render.traceMode (default fullscreen). "
+                    "--stats reports the mode that ran")
         ->check(CLI::IsMember({"fullscreen", "box", "auto"}));
     return cmd;
 }
