@@ -308,6 +308,10 @@ TEST_P(BoxTrace, BoxCrossesNearPlane) {
 TEST_P(BoxTrace, MeshesAndBoxes) {
     Frame box = parity("mesh", meshScenePath(false));
     EXPECT_GT(box.stats.drawCalls, 0u);
+    if (box.ok) {
+        const std::string failure = checkGolden(backendOf(GetParam()), "box_trace_mesh", box.image);
+        EXPECT_TRUE(failure.empty()) << failure;
+    }
 }
 
 // KNOWN GAP: a mesh box cutting into the SDF ball right behind the ball's silhouette. On a vertical
