@@ -41,6 +41,7 @@
 #include "renderer/features/lighting.h"
 #include "renderer/features/lighting_reference.h"
 #include "renderer/features/mesh_gbuffer.h"
+#include "renderer/features/post_output.h"
 #include "renderer/features/scene_upload.h"
 #include "renderer/features/sdf_atlas.h"
 #include "renderer/features/sdf_box_trace.h"
@@ -50,6 +51,7 @@
 #include "renderer/features/sdf_surface.h"
 #include "renderer/features/sdf_trace.h"
 #include "renderer/features/sdf_world_cache.h"
+#include "renderer/features/taa.h"
 
 namespace penumbra::render {
 namespace {
@@ -68,6 +70,7 @@ enum TargetId : uint32_t {
     kThickness,
     kReflection,
     kOutput,
+    kSceneColor,  // the linear colour lighting writes when TAA or motion blur follow
     kTargetCount
 };
 
@@ -81,7 +84,7 @@ constexpr TargetInfo kTargets[kTargetCount] = {
     {"gbuffer.albedo", rhi::Format::RGBA8_UNORM},   {"gbuffer.aux", rhi::Format::RG32_FLOAT},
     {"effects.shadow", rhi::Format::R8_UNORM},      {"effects.ao", rhi::Format::RGBA8_UNORM},
     {"effects.thickness", rhi::Format::R16_FLOAT},  {"effects.reflection", rhi::Format::RGBA16_FLOAT},
-    {"output", rhi::Format::RGBA8_UNORM},
+    {"output", rhi::Format::RGBA8_UNORM},           {"scene.color", rhi::Format::RGBA16_FLOAT},
 };
 
 // A render target owned by the renderer; the frame graph tracks its state (importPersistent).
@@ -119,7 +122,8 @@ struct LightSource {
 // The camera of a frame, without scale: forward = -zAxis, right = xAxis, up = yAxis.
 struct CameraSetup {
     glm::vec3 xAxis{1, 0, 0}, yAxis{0, 1, 0}, zAxis{0, 0, 1}, eye{0.0f};
-    glm::mat4 view{1.0f}, proj{1.0f}, viewProj{1.0f};
+    glm::mat4 view{1.0f}, proj{1.0f}, viewProj{1.0f};  // proj and viewProj include the TAA jitter
+    glm::mat4 unjitteredProj{1.0f};
     float nearPlane = 0.1f;
     float farPlane = 1.0f;
 };
@@ -140,6 +144,9 @@ struct FrameGather {
     bool albedo = false;          // some material has a base-colour texture
     bool hardwareSrgb = false;
     bool external = false;
+    bool taa = false;        // TAA runs (renderer/features/taa.h)
+    bool post = false;       // TAA or motion blur: lighting writes scene.color, post_output the output
+    glm::vec2 jitter{0.0f};  // this frame's sub-pixel jitter in pixels (TAA only)
 };
 
 bool finite(const glm::mat4& m) {
@@ -181,6 +188,8 @@ struct SceneRenderer::Impl {
     uint32_t shadowLayers = 0;                // layers of targets[kShadow]
     uint32_t warnedShadowWidth = 0;           // frame width last warned about for too many shadow layers
     uint32_t frameIndex = 0;
+    TaaHistory taa;              // the TAA history (only while frames run TAA)
+    glm::vec2 lastJitter{0.0f};  // the jitter of prevViewProj
 
     // the last frame
     SceneFrameData frameData;  // read by scene_upload's execute
@@ -209,10 +218,12 @@ struct SceneRenderer::Impl {
           cache(d),
           atlas(d),
           worldCache(d),
-          sdfStore(d) {}
+          sdfStore(d),
+          taa(d) {}
 
     ~Impl() {
         for (Target& t : targets) release(t);
+        taa.release(graph);
         sdfStore.release(graph);
     }
 
@@ -277,6 +288,7 @@ struct SceneRenderer::Impl {
     bool prepareTargets(const FrameDesc& desc, const FrameGather& g, std::string& error);
     bool uploadFields(FrameGather& g, std::string& error);
     void planEffects(const FrameDesc& desc, FrameGather& g);
+    bool preparePost(const FrameDesc& desc, FrameGather& g, CameraSetup& cam, std::string& error);
     void fillFrameData(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
     void fillSdfData(const FrameGather& g);
     uint64_t buildGraph(const FrameDesc& desc, const CameraSetup& cam, const FrameGather& g);
@@ -305,7 +317,7 @@ bool SceneRenderer::render(const ecs::World& world, const assets::AssetManager& 
     std::string why;
     if (!s.checkFrame(world, desc, g, why) || !s.setupCamera(world, desc, cam, why) ||
         !s.gather(world, assets, g, why) || !s.uploadAssets(assets, g, why) ||
-        (s.planEffects(desc, g), !s.prepareTargets(desc, g, why))) {
+        (s.planEffects(desc, g), !s.preparePost(desc, g, cam, why)) || !s.prepareTargets(desc, g, why)) {
         error = "scene renderer: " + why;
         return false;
     }
@@ -412,6 +424,7 @@ bool SceneRenderer::Impl::setupCamera(const ecs::World& world, const FrameDesc& 
                                      camera.farPlane);
     cam.proj[1][1] *= -1.0f;  // Vulkan clip space: NDC y = -1 is image row 0
     cam.viewProj = cam.proj * cam.view;
+    cam.unjitteredProj = cam.proj;
     cam.nearPlane = camera.nearPlane;
     cam.farPlane = camera.farPlane;
     return true;
@@ -592,6 +605,30 @@ void SceneRenderer::Impl::planEffects(const FrameDesc& desc, FrameGather& g) {
     fx.reflection = on && reflection;
 }
 
+// TAA and motion blur run on lit frames that draw something (a debug view or an empty frame writes
+// the output directly). TAA: the history restarts on a camera change or FrameDesc::resetHistory
+// (and, in TaaHistory::begin, on a size change or after frames without TAA, which free it); the
+// jitter phase is the renderer's frame index (not time), so a sequence renders the same every run. The
+// projection moves the image by -jitter, so pixel p samples p + 0.5 + jitter as the traced rays do.
+bool SceneRenderer::Impl::preparePost(const FrameDesc& desc, FrameGather& g, CameraSetup& cam,
+                                      std::string& error) {
+    const bool drawing = !g.sources.empty() || g.tracedSdfs > 0;
+    const bool lit = drawing && frameDebugView(desc.debugView, desc.settings) == DebugView::None;
+    g.taa = lit && desc.settings.taa;
+    g.post = g.taa || (lit && desc.settings.motionBlur.enabled);
+    if (!g.taa) {
+        taa.release(graph);
+        return true;
+    }
+    const bool sameCamera = haveHistory && historyCamera == desc.camera;
+    if (!taa.begin(graph, desc.width, desc.height, desc.resetHistory || !sameCamera, error)) return false;
+    g.jitter = taaJitter(frameIndex);
+    cam.proj[2][0] += 2.0f * g.jitter.x / float(desc.width);
+    cam.proj[2][1] += 2.0f * g.jitter.y / float(desc.height);
+    cam.viewProj = cam.proj * cam.view;
+    return true;
+}
+
 // GPU copies of the meshes and (albedo frames) textures this frame needs.
 bool SceneRenderer::Impl::uploadAssets(const assets::AssetManager& assets, FrameGather& g,
                                        std::string& error) {
@@ -639,8 +676,9 @@ bool SceneRenderer::Impl::prepareTargets(const FrameDesc& desc, const FrameGathe
     for (uint32_t i = 0; i < kTargetCount; ++i) {
         const TargetId id = TargetId(i);
         const bool needed =
-            id == kOutput   ? !g.external
-            : id == kAlbedo ? drawing && g.albedo
+            id == kOutput       ? !g.external
+            : id == kSceneColor ? g.post
+            : id == kAlbedo     ? drawing && g.albedo
             : id == kAux ? drawing && frameNeedsAux(desc.aux, frameDebugView(desc.debugView, desc.settings))
             : id == kShadow     ? drawing && fx.shadowLayers > 0
             : id == kAo         ? drawing && fx.ao.variant != scene::AoVariant::Off
@@ -670,12 +708,12 @@ void SceneRenderer::Impl::fillFrameData(const FrameDesc& desc, const CameraSetup
     v.rayRight = glm::vec4(cam.xAxis / cam.proj[0][0], 0.0f);
     v.rayUp = glm::vec4(cam.yAxis / cam.proj[1][1], 0.0f);
     v.viewport = {float(desc.width), float(desc.height), 1.0f / float(desc.width), 1.0f / float(desc.height)};
-    v.jitter = glm::vec4(0.0f);
+    v.jitter = glm::vec4(g.jitter, sameCamera ? lastJitter : g.jitter);
     v.frameIndex = frameIndex;
     fd.scene.ambient = glm::vec4(desc.settings.ambient, desc.settings.exposure);
     fd.scene.background = glm::vec4(desc.settings.background, 1.0f);
     fd.scene.params = {uint32_t(g.lights.size()), uint32_t(desc.settings.shading),
-                       uint32_t(desc.settings.toneMapper), g.hardwareSrgb ? 1u : 0u};
+                       uint32_t(desc.settings.toneMapper), g.hardwareSrgb || g.post ? 1u : 0u};
     fd.scene.ambientSky = glm::vec4(desc.settings.ambientSky.value_or(desc.settings.ambient), 0.0f);
     const EffectsDesc& fx = g.effects;
     fd.scene.effects = {fx.shadowLayers, fx.ao.variant != scene::AoVariant::Off ? 1u : 0u,
@@ -914,8 +952,8 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         // Per-tile lists of the traced objects (the tiles debug view shows them whatever the toggle).
         if (g.tracedSdfs > 0 &&
             ((desc.settings.acceleration.culling && !boxTrace) || view == DebugView::Tiles))
-            addSdfTileCull(fc, {std::span(sdfData.objects).first(sdfData.tracedCount), cam.view, cam.proj,
-                                cam.nearPlane, cam.farPlane});
+            addSdfTileCull(fc, {std::span(sdfData.objects).first(sdfData.tracedCount), cam.view,
+                                cam.unjitteredProj, cam.nearPlane, cam.farPlane});
         if (g.tracedSdfs > 0 && boxTrace) {
             SdfBoxTraceDesc box;
             box.settings = trace.settings;
@@ -926,7 +964,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
             box.countEvaluations = trace.countEvaluations;
             box.objects = traced;
             box.view = cam.view;
-            box.proj = cam.proj;
+            box.proj = cam.unjitteredProj;  // the near-plane test and the coverage estimate
             lastBoxTrace = addSdfBoxTrace(fc, box);
         } else if (g.tracedSdfs > 0) {
             addSdfTrace(fc, trace);  // occluders only: the effects still see them
@@ -952,8 +990,18 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         const scene::TraceSettings trace = desc.settings.resolvedTrace();
         addDebugView(fc, {view, debugDepthRange(cam, g), trace.maxSteps, desc.settings.slice,
                           trace.fieldSafety, cam.nearPlane, cam.farPlane});
-    } else {
+    } else if (!g.post) {
         addLighting(fc);
+    } else {
+        // TAA / motion blur: lighting writes the linear colour, post_output the output.
+        const Output display = out;
+        out.color = importTarget(kSceneColor);
+        out.srgbTarget = false;
+        out.format = kTargets[kSceneColor].format;
+        addLighting(fc);
+        const fg::TextureRef color = g.taa ? taa.add(fc, out.color) : out.color;
+        out = display;
+        addPostOutput(fc, color, desc.settings.motionBlur);
     }
     return transientBytes;
 }
@@ -964,8 +1012,9 @@ void SceneRenderer::Impl::addWorldCache(FrameContext& fc, const FrameDesc& desc,
     const scene::AccelerationSettings& accel = desc.settings.acceleration;
     if (accel.prepass && !warnedPrepass) {
         warnedPrepass = true;
-        log::warn("scene renderer: render.acceleration.prepass: the cone prepass (optional, issue 13 item 6) "
-                  "is not implemented yet; frames are traced without it");
+        log::warn(
+            "scene renderer: render.acceleration.prepass: the cone prepass (optional, issue 13 item 6) "
+            "is not implemented yet; frames are traced without it");
     }
     std::string why;
     if (!(accel.worldCache || accel.idField) || sdfData.objects.empty())
@@ -1016,6 +1065,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     haveHistory = true;
     historyCamera = desc.camera;
     prevViewProj = cam.viewProj;
+    lastJitter = g.jitter;
+    if (g.taa) taa.endFrame();
     prevModels.clear();
     for (const DrawSource& src : g.sources) prevModels[src.entity] = src.model;
     for (const SdfSource& src : g.sdfs) prevModels[src.entity] = src.model;
@@ -1032,7 +1083,7 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     st.memory.textures = cache.textureBytes();
     st.memory.sceneBuffers = board.has<SceneBuffers>() ? board.find<SceneBuffers>()->bytes : 0;
     st.effects = effectsReport(g);
-    st.memory.renderTargets = targetBytes() + transientBytes + st.effects.lowResBytes;
+    st.memory.renderTargets = targetBytes() + transientBytes + st.effects.lowResBytes + taa.bytes();
     st.drawCalls = uint32_t(g.sources.size());
     st.sdfObjects = g.tracedSdfs;
     st.sdfOccluders = uint32_t(g.sdfs.size()) - g.tracedSdfs;
@@ -1052,7 +1103,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     }
     if (!g.sdfs.empty()) {
         const SdfSceneStore::Stats& up = sdfStore.stats();
-        st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes, up.objectBufferBytes};
+        st.sdfUpload = {up.objectsUploaded, up.fullUpload, up.deltaBytes, up.uploadBytes,
+                        up.objectBufferBytes};
     }
     keptBuffers.clear();
     // The SDF object array (GpuSdfObject per object, traced first) for readBuffer: the box-trace
@@ -1061,7 +1113,8 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
         keptBuffers["sdf.objects"] = {graph.physicalBuffer(sb->objects),
                                       uint64_t(sdfData.objects.size()) * sizeof(GpuSdfObject)};
     if (const SdfCullLists* lists = board.find<SdfCullLists>()) {
-        for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao}) st.tileListBytes += l->bytes;
+        for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao})
+            st.tileListBytes += l->bytes;
         if (lists->primary.valid()) {
             const uint64_t rangeBytes = uint64_t(lists->primary.tilesX) * lists->primary.tilesY * 8;
             keptBuffers["sdf.tile_ranges"] = {graph.physicalBuffer(lists->primary.ranges), rangeBytes};

@@ -18,7 +18,13 @@
 //   lighting       (raster)    full-screen deferred lighting (Cook-Torrance or Blinn-Phong,
 //                              directional, point and sphere lights with their shadows, hemisphere
 //                              ambient x AO, translucency, reflections) + exposure + tone mapping,
-//                              written sRGB-encoded into the RGBA8 output
+//                              written sRGB-encoded into the RGBA8 output (with TAA or motion
+//                              blur: linear into scene.color, RGBA16F)
+//   taa            (raster)    render.taa: resolves scene.color with the jittered history
+//                              (renderer/features/taa.h)
+//   motion_blur_tiles (compute), post_output (raster)  with TAA or render.motionBlur: the colour into
+//                              the output, sRGB-encoded, motion-blurred when asked
+//                              (renderer/features/post_output.h)
 //   debug_view     (raster)    instead of lighting when a debug view is set (FrameDesc::debugView,
 //                              else the scene's render.debugView): one G-buffer channel (normals,
 //                              depth, albedo, steps, ids) in the output, or debug_field_slice (the
@@ -150,6 +156,8 @@ struct FrameDesc {
     // gbuffer.aux y counts the trace's object distance evaluations instead of its steps (tests and
     // benchmarks of the acceleration: the work culling, world cache and id field save).
     bool auxEvaluations = false;
+    // Restart the TAA history this frame (a camera cut): the frame is its own first sample.
+    bool resetHistory = false;
 };
 
 class SceneRenderer {

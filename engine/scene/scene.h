@@ -168,6 +168,15 @@ struct AccelerationSettings {
     uint32_t cacheBudgetVoxels = 4096;  // dirty-region voxels recomputed per frame (rest queued)
 };
 
+// Motion blur from the velocity buffer (renderer/features/motion_blur.h): each pixel gathers
+// `samples` taps along its tile's largest motion, scaled by `strength` (1 = the motion of one frame
+// interval, i.e. a shutter open for the whole frame).
+struct MotionBlurSettings {
+    bool enabled = false;
+    float strength = 1.0f;  // 0..4
+    uint32_t samples = 8;   // 2..32 taps per pixel
+};
+
 struct RenderSettings {
     uint32_t width = 640;
     uint32_t height = 360;
@@ -191,6 +200,8 @@ struct RenderSettings {
     AccelerationSettings acceleration;        // --accel replaces the toggles
     // How SDF objects are traced (render.traceMode); --trace-mode replaces it.
     TraceMode traceMode = TraceMode::Fullscreen;
+    bool taa = false;                         // temporal anti-aliasing (render.taa; --taa replaces it)
+    MotionBlurSettings motionBlur;            // render.motionBlur; --motion-blur replaces `enabled`
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };

@@ -426,6 +426,7 @@ private:
     bool parseAo(const json& v, const std::string& ptr, AoSettings& out);
     bool parseReflections(const json& v, const std::string& ptr, ReflectionSettings& out);
     bool parseAcceleration(const json& v, const std::string& ptr, AccelerationSettings& out);
+    bool parseMotionBlur(const json& v, const std::string& ptr, MotionBlurSettings& out);
     bool parseTraceOverrides(const json& v, const std::string& ptr, TraceOverrides& out);
     bool parseMaterials(const json& v, const std::string& ptr);
     bool parseMaterial(const json& v, const std::string& ptr, ecs::Material& out);
@@ -540,7 +541,7 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
                                       {"width", "height", "shading", "toneMapper", "exposure", "ambient",
                                        "ambientSky", "background", "camera", "fixedDt", "quality", "trace",
                                        "debugView", "slice", "shadows", "ao", "reflections", "meshSdf",
-                                       "acceleration", "traceMode"},
+                                       "acceleration", "traceMode", "taa", "motionBlur"},
                                       "render settings")) {
         return false;
     }
@@ -616,6 +617,10 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             if (!parseTraceMode(name, s.traceMode))
                 return fail(p,
                             fmt::format("unknown traceMode '{}' (expected fullscreen, box or auto)", name));
+        } else if (key == "taa") {
+            if (!boolean(value, p, s.taa)) return false;
+        } else if (key == "motionBlur") {
+            if (!parseMotionBlur(value, p, s.motionBlur)) return false;
         } else if (key == "meshSdf") {
             std::string name;
             if (!string(value, p, name)) return false;
@@ -742,6 +747,27 @@ bool SceneParser::parseAcceleration(const json& v, const std::string& ptr, Accel
             if (!number(value, p, out.cacheVoxel) || !nonNegative(p, out.cacheVoxel, "cacheVoxel"))
                 return false;
         } else if (!count(value, p, 512, UINT32_MAX, out.cacheBudgetVoxels)) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// The render block's "motionBlur": a boolean (enabled with the defaults) or an object.
+bool SceneParser::parseMotionBlur(const json& v, const std::string& ptr, MotionBlurSettings& out) {
+    if (v.is_boolean()) return boolean(v, ptr, out.enabled);
+    if (!object(v, ptr) || !checkKeys(v, ptr, {"enabled", "strength", "samples"}, "motion blur settings"))
+        return false;
+    out.enabled = true;
+    for (const auto& item : v.items()) {
+        const std::string& key = item.key();
+        const std::string p = child(ptr, key);
+        if (key == "enabled") {
+            if (!boolean(item.value(), p, out.enabled)) return false;
+        } else if (key == "strength") {
+            if (!number(item.value(), p, out.strength) || !inRange(p, out.strength, 0.0f, 4.0f, true, false))
+                return false;
+        } else if (!count(item.value(), p, 2, 32, out.samples)) {
             return false;
         }
     }

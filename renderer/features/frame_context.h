@@ -68,6 +68,9 @@ struct GBuffer {
 struct Output {
     fg::TextureRef color;
     bool srgbTarget = false;
+    // RGBA16_FLOAT: the linear scene colour lighting writes for TAA / motion blur (post_output.h)
+    // instead of the RGBA8 output; Undefined: RGBA8 (srgbTarget says which).
+    rhi::Format format = rhi::Format::Undefined;
 };
 
 }  // namespace penumbra::render

@@ -8,8 +8,10 @@ FullscreenProgram fullscreenProgram(FrameContext& fc, const rhi::ShaderDesc& ver
     p.vertex = &vertex;
     p.fragment = &fragment;
     rhi::GraphicsPipelineDesc pd;
-    pd.colorFormats = {fc.board.find<Output>()->srgbTarget ? rhi::Format::RGBA8_SRGB
-                                                           : rhi::Format::RGBA8_UNORM};
+    const Output& out = *fc.board.find<Output>();
+    pd.colorFormats = {out.format != rhi::Format::Undefined ? out.format
+                       : out.srgbTarget                     ? rhi::Format::RGBA8_SRGB
+                                                            : rhi::Format::RGBA8_UNORM};
     p.pipeline = fc.cache.graphicsPipeline(vertex, fragment, pd);
     p.nearest = gbufferSampler(fc.cache);
     return p;

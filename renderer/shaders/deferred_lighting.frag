@@ -52,7 +52,7 @@ void main() {
     if (depth <= 0.0) {
         radiance = scene.background.rgb;
     } else {
-        vec2 ndc = (vec2(pixel) + 0.5) * view.viewport.zw * 2.0 - 1.0;
+        vec2 ndc = (vec2(pixel) + 0.5 + view.jitter.xy) * view.viewport.zw * 2.0 - 1.0;  // the trace's ray
         vec3 ray = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
         vec3 p = view.position.xyz + depth * ray;
         vec3 v = -normalize(ray);
@@ -108,5 +108,6 @@ void main() {
         }
     }
     vec3 mapped = toneMap(scene.params.z, radiance * scene.ambient.w);
+    // params.w: write linear (a hardware-sRGB output, or the linear scene colour TAA and motion blur read)
     outColor = vec4(scene.params.w != 0u ? mapped : srgbEncode(mapped), 1.0);
 }

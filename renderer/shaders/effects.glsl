@@ -11,9 +11,10 @@ ivec2 effectsFullPixel(ivec2 low, ivec2 lowSize, ivec2 fullSize) {
     return min(ivec2(centre), fullSize - 1);
 }
 
-// The camera ray through a full-resolution pixel centre; its parameter is the linear view depth.
+// The camera ray through a full-resolution pixel centre (moved by the TAA jitter, the trace's ray);
+// its parameter is the linear view depth.
 vec3 effectsPixelRay(ivec2 pixel) {
-    vec2 ndc = (vec2(pixel) + 0.5) * view.viewport.zw * 2.0 - 1.0;
+    vec2 ndc = (vec2(pixel) + 0.5 + view.jitter.xy) * view.viewport.zw * 2.0 - 1.0;
     return view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
 }
 

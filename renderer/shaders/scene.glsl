@@ -40,7 +40,7 @@ struct Object {
     layout(set = 1, binding = 0, std140) uniform Scene {                                        \
         vec4 ambient;    /* rgb ambient radiance (from below with a sky), w exposure */         \
         vec4 background; /* rgb background radiance */                                         \
-        uvec4 params;    /* x lights, y shading model, z tone mapper, w 1 = target encodes sRGB */ \
+        uvec4 params;    /* x lights, y shading model, z tone mapper, w 1 = write linear (sRGB target, post) */ \
         vec4 ambientSky; /* rgb ambient radiance from straight up */                            \
         uvec4 effects;   /* x shadow layers, y AO target, z thickness, w reflections (1 = on) */ \
     }                                                                                           \

@@ -57,9 +57,10 @@ vec2 clipToPixel(vec4 clip) { return (clip.xy / clip.w * 0.5 + 0.5) * view.viewp
 
 void main() {
     uint obj = trace.draw.x;
-    // The ray through the pixel centre, computed as sdf_trace.comp does (gl_FragCoord.xy is the
-    // pixel plus 0.5 on both backends).
-    vec2 ndc = gl_FragCoord.xy * view.viewport.zw * 2.0 - 1.0;
+    // The ray through the pixel centre moved by the TAA jitter (0 without TAA), computed as
+    // sdf_trace.comp does (gl_FragCoord.xy is the pixel plus 0.5 on both backends; the jittered
+    // projection moves the rasterized box by -jitter, so the box covers the pixels this ray needs).
+    vec2 ndc = (gl_FragCoord.xy + view.jitter.xy) * view.viewport.zw * 2.0 - 1.0;
     vec3 dir = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
     float dirLength = length(dir);
     vec3 rd = dir / dirLength;

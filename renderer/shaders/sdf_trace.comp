@@ -113,9 +113,10 @@ void main() {
     if (pixel.x >= int(view.viewport.x) || pixel.y >= int(view.viewport.y)) return;
     bool raster = (trace.counts.y & kRasterFlag) != 0u;
 
-    // The ray through the pixel centre; dir has unit component along the view direction, so the
-    // linear depth of a point at ray parameter t (unit direction) is t / |dir|.
-    vec2 ndc = (vec2(pixel) + 0.5) * view.viewport.zw * 2.0 - 1.0;
+    // The ray through the pixel centre (moved by the TAA jitter, 0 without TAA); dir has unit
+    // component along the view direction, so the linear depth of a point at ray parameter t (unit
+    // direction) is t / |dir|.
+    vec2 ndc = (vec2(pixel) + 0.5 + view.jitter.xy) * view.viewport.zw * 2.0 - 1.0;
     vec3 dir = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
     float dirLength = length(dir);
     vec3 rd = dir / dirLength;

@@ -232,6 +232,15 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
                     "docs/BENCHMARKS.md); replaces the scene's render.traceMode (default fullscreen). "
                     "--stats reports the mode that ran")
         ->check(CLI::IsMember({"fullscreen", "box", "auto"}));
+    cmd->add_option("--taa", opt.taa,
+                    "Temporal anti-aliasing: on | off (replaces the scene's render.taa; it converges over "
+                    "frames: with --frames N --fixed-dt T, frame k is rendered at k * T with jitter phase k, "
+                    "so runs are reproducible; docs/FORMATS.md)")
+        ->check(CLI::IsMember({"on", "off"}));
+    cmd->add_option("--motion-blur", opt.motionBlur,
+                    "Motion blur from the velocity buffer: on | off (replaces the scene's "
+                    "render.motionBlur.enabled; its strength and samples stay the scene's)")
+        ->check(CLI::IsMember({"on", "off"}));
     return cmd;
 }
 
@@ -253,6 +262,8 @@ bool applySceneOverrides(const RenderOptions& opt, const glm::vec4& slice, Engin
     }
     if (!opt.ao.empty()) scene::parseAoVariant(opt.ao, settings.ao.variant);
     applyAccelOption(opt.accel, settings.acceleration, error);  // checked in runRender
+    if (!opt.taa.empty()) settings.taa = opt.taa == "on";
+    if (!opt.motionBlur.empty()) settings.motionBlur.enabled = opt.motionBlur == "on";
     // After the effect overrides: auto looks at them.
     if (!opt.meshSdf.empty()) scene::parseMeshSdfMode(opt.meshSdf, settings.meshSdf);
     if (!scene::applyMeshSdf(engine.scene(), engine.assets(), settings.meshSdf, error)) return false;

@@ -39,6 +39,8 @@ struct RenderOptions {
     std::string aov;              // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
     std::string traceMode;        // --trace-mode fullscreen|box|auto; empty: the scene's
     std::string accel;            // --accel all | none | culling,cache,id,prepass; empty: the scene's
+    std::string taa;              // override: on | off (render.taa)
+    std::string motionBlur;       // override: on | off (render.motionBlur.enabled)
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt);

@@ -1,0 +1,64 @@
+// Feature "taa": temporal anti-aliasing (mTec 8.2.11, after PlayDead's TAA and Karis 2014). With
+// render.taa the frame is rendered with a sub-pixel jitter (taaJitter: Halton(2, 3), 16 phases, the
+// phase being the SceneRenderer's frame index, not time: a sequence is reproducible), lighting
+// writes the linear tone-mapped colour, and the "taa" pass (renderer/shaders/taa.frag) resolves it
+// with the persistent history:
+//   - reprojection by gbuffer.velocity (per-object and camera motion, jitter removed) of the nearest
+//     surface in the 3x3 neighbourhood (background: camera rotation), bilinear history resampling;
+//   - the history clipped to this frame's 3x3 neighbourhood box in YCoCg;
+//   - history rejection on disocclusion (depth kept in the history's alpha), and Wright 2015's
+//     unstable pixels: a rejected pixel takes its blurred surroundings, not its aliased sample;
+//   - the history restarts (the frame shows its own jittered sample) on a size change, a camera
+//     change, FrameDesc::resetHistory and after any frame that did not run TAA.
+// The SDF trace, the G-buffer's position reconstruction and the half- / quarter-resolution shadows
+// and AO all follow the jittered rays, so the history also averages their under-sampling.
+#pragma once
+
+#include <string>
+
+#include <glm/vec2.hpp>
+
+#include "renderer/features/frame_context.h"
+
+namespace penumbra::render {
+
+inline constexpr uint32_t kTaaJitterPhases = 16;
+inline constexpr float kTaaCurrentWeight = 0.1f;    // exponential blend weight of each new frame
+inline constexpr float kTaaDepthTolerance = 0.05f;  // relative depth change still the same surface
+
+// The jitter of frame `index`, in pixels within (-0.5, 0.5):
+// the Halton(2, 3) point (index % 16) + 1 minus 0.5.
+glm::vec2 taaJitter(uint32_t index);
+
+// The history: two RGBA16F targets (this frame writes one and reads the other), rgb the resolved
+// colour, a the linear depth of the pixel (0: background). Owned by the SceneRenderer.
+class TaaHistory {
+public:
+    explicit TaaHistory(rhi::Device& device) : m_device(device) {}
+    TaaHistory(const TaaHistory&) = delete;
+    TaaHistory& operator=(const TaaHistory&) = delete;
+
+    // Starts a TAA frame of width x height: allocates the targets on first use or a size change
+    // (the history restarts) and restarts it when `reset`. False with `error` if allocation fails.
+    bool begin(fg::FrameGraph& graph, uint32_t width, uint32_t height, bool reset, std::string& error);
+    // Frames in the history before this one (0: the frame starts it).
+    uint32_t sampleIndex() const { return m_samples; }
+    // Adds "taa": resolves `color` (this frame's linear colour) with the history; returns the
+    // resolved colour (the history target this frame writes).
+    fg::TextureRef add(FrameContext& fc, fg::TextureRef color);
+    // After the frame ran: the written target becomes the history.
+    void endFrame();
+    // Frees the targets (a frame without TAA, the renderer's end).
+    void release(fg::FrameGraph& graph);
+    uint64_t bytes() const { return m_bytes; }
+
+private:
+    rhi::Device& m_device;
+    rhi::TextureHandle m_targets[2];
+    uint32_t m_width = 0, m_height = 0;
+    uint32_t m_write = 0;    // the target this frame writes; the other holds the history
+    uint32_t m_samples = 0;  // frames accumulated in the history
+    uint64_t m_bytes = 0;
+};
+
+}  // namespace penumbra::render
