@@ -85,7 +85,7 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
     bilinear.debugName = "taa.bilinear";
     const rhi::SamplerHandle linear = fc.cache.sampler(bilinear);
     const program::PushConstants push{
-        glm::vec4(m_samples > 0 ? 1.0f : 0.0f, kTaaCurrentWeight, kTaaDepthTolerance, 0.0f)};
+        glm::vec4(m_samples > 0 ? 1.0f : 0.0f, kTaaCurrentWeight, kTaaDepthTolerance, kTaaMovingWeight)};
     const fg::TextureRef history =
         fc.graph.importPersistent("taa.history", m_targets[m_write ^ 1u], rhi::Access::ShaderSampled);
     const fg::TextureRef target =

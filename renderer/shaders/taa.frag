@@ -19,8 +19,15 @@ layout(set = 2, binding = 2) uniform sampler2D gbufferVelocity;
 layout(set = 2, binding = 3) uniform sampler2D history;  // bilinear, clamped
 
 layout(push_constant) uniform Taa {
-    vec4 params;  // x 1 = the history is valid, y weight of this frame, z relative depth tolerance
+    // x 1 = the history is valid, y weight of this frame (still surface), z relative depth tolerance,
+    // w weight of this frame for a surface moving kTaaFullMotion pixels per frame or more
+    vec4 params;
 } taa;
+
+// From this motion (pixels per frame) on, this frame gets weight params.w: the history, resampled
+// bilinearly at a fractional offset each frame, blurs and trails where thin surfaces move against
+// what lies behind them (their mixed pixels have no single motion); a still surface keeps params.y.
+const float kTaaFullMotion = 0.25;
 
 layout(location = 0) in vec2 vUv;
 layout(location = 0) out vec4 outColor;
@@ -114,5 +121,6 @@ void main() {
         return;
     }
     vec3 h = fromYCoCg(clipToBox(lo, hi, toYCoCg(texture(history, prev / view.viewport.xy).rgb)));
-    outColor = vec4(mix(h, current, taa.params.y), depth);
+    float weight = mix(taa.params.y, taa.params.w, clamp(length(motion) / kTaaFullMotion, 0.0, 1.0));
+    outColor = vec4(mix(h, current, weight), depth);
 }
