@@ -118,7 +118,7 @@ struct FrameStats {
     std::vector<fg::PassTiming> passes;  // executed passes in order
     MemoryReport memory;
     uint32_t drawCalls = 0;
-    uint32_t sdfObjects = 0;  // SdfRenderer entities traced
+    uint32_t sdfObjects = 0;    // SdfRenderer entities traced
     uint32_t sdfOccluders = 0;  // occluderOnly SdfRenderers (mesh fields seen by shadows and AO only)
     AtlasReport atlas;
     EffectsReport effects;

@@ -200,8 +200,8 @@ struct RenderSettings {
     AccelerationSettings acceleration;        // --accel replaces the toggles
     // How SDF objects are traced (render.traceMode); --trace-mode replaces it.
     TraceMode traceMode = TraceMode::Fullscreen;
-    bool taa = false;                         // temporal anti-aliasing (render.taa; --taa replaces it)
-    MotionBlurSettings motionBlur;            // render.motionBlur; --motion-blur replaces `enabled`
+    bool taa = false;               // temporal anti-aliasing (render.taa; --taa replaces it)
+    MotionBlurSettings motionBlur;  // render.motionBlur; --motion-blur replaces `enabled`
     // The preset of `quality` with the overrides applied.
     TraceSettings resolvedTrace() const;
 };

@@ -537,12 +537,12 @@ bool SceneParser::parseVersion(const json& root) {
 }
 
 bool SceneParser::parseRender(const json& v, const std::string& ptr) {
-    if (!object(v, ptr) || !checkKeys(v, ptr,
-                                      {"width", "height", "shading", "toneMapper", "exposure", "ambient",
-                                       "ambientSky", "background", "camera", "fixedDt", "quality", "trace",
-                                       "debugView", "slice", "shadows", "ao", "reflections", "meshSdf",
-                                       "acceleration", "traceMode", "taa", "motionBlur"},
-                                      "render settings")) {
+    if (!object(v, ptr) ||
+        !checkKeys(v, ptr, {"width",        "height",     "shading", "toneMapper", "exposure",    "ambient",
+                            "ambientSky",   "background", "camera",  "fixedDt",    "quality",     "trace",
+                            "debugView",    "slice",      "shadows", "ao",         "reflections", "meshSdf",
+                            "acceleration", "traceMode",  "taa",     "motionBlur"},
+                   "render settings")) {
         return false;
     }
     RenderSettings& s = m_scene.settings;
@@ -599,9 +599,10 @@ bool SceneParser::parseRender(const json& v, const std::string& ptr) {
             std::string name;
             if (!string(value, p, name)) return false;
             if (!parseDebugView(name, s.debugView)) {
-                return fail(p, fmt::format("unknown debug view '{}' (expected none, normals, depth, albedo, "
-                                           "steps, ids, field-slice, ao, shadow, bentnormal, thickness or tiles)",
-                                           name));
+                return fail(
+                    p, fmt::format("unknown debug view '{}' (expected none, normals, depth, albedo, "
+                                   "steps, ids, field-slice, ao, shadow, bentnormal, thickness or tiles)",
+                                   name));
             }
         } else if (key == "shadows") {
             if (!parseShadows(value, p, s.shadows)) return false;

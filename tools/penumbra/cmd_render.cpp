@@ -87,9 +87,12 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                           {"samples", s.gpu.size()}});
     }
     j["passes"] = passes;
-    j["memory"] = {{"meshBuffers", stats.memory.meshBuffers}, {"sceneBuffers", stats.memory.sceneBuffers},
-                   {"textures", stats.memory.textures},       {"renderTargets", stats.memory.renderTargets},
-                   {"sdfAtlas", stats.memory.sdfAtlas},       {"worldCache", stats.memory.worldCache},
+    j["memory"] = {{"meshBuffers", stats.memory.meshBuffers},
+                   {"sceneBuffers", stats.memory.sceneBuffers},
+                   {"textures", stats.memory.textures},
+                   {"renderTargets", stats.memory.renderTargets},
+                   {"sdfAtlas", stats.memory.sdfAtlas},
+                   {"worldCache", stats.memory.worldCache},
                    {"total", stats.memory.total()}};
     j["sdfAtlas"] = {{"bytes", stats.atlas.bytes},
                      {"fill", jsonNumber(stats.atlas.fill)},
@@ -201,10 +204,11 @@ CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt) {
         ->check(CLI::IsMember({"cook-torrance", "blinn-phong"}));
     cmd->add_option("--tone-mapper", opt.toneMapper, "Override the scene's tone mapper")
         ->check(CLI::IsMember({"clamp", "reinhard", "aces"}));
-    cmd->add_option("--debug-view", opt.debugView,
-                    "Show a debug view instead of the lit image: normals | depth | albedo | steps | ids | "
-                    "field-slice | ao | shadow (first shadowed light) | bentnormal | thickness | tiles (objects per "
-                    "8x8 tile after culling) (none: lit; replaces the scene's render.debugView; docs/FORMATS.md)")
+    cmd->add_option(
+           "--debug-view", opt.debugView,
+           "Show a debug view instead of the lit image: normals | depth | albedo | steps | ids | "
+           "field-slice | ao | shadow (first shadowed light) | bentnormal | thickness | tiles (objects per "
+           "8x8 tile after culling) (none: lit; replaces the scene's render.debugView; docs/FORMATS.md)")
         ->check(CLI::IsMember({"none", "normals", "depth", "albedo", "steps", "ids", "field-slice", "ao",
                                "shadow", "bentnormal", "thickness", "tiles"}));
     cmd->add_option("--slice", opt.slice,

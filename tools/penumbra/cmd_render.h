@@ -26,21 +26,21 @@ struct RenderOptions {
     std::string graphviz;
     std::string cacheDir;  // empty: $PENUMBRA_CACHE_DIR, else $XDG_CACHE_HOME/penumbra or ~/.cache/penumbra
     bool noCache = false;
-    std::string meshSdf;  // --mesh-sdf off | trace | occlusion | auto; empty: the scene's render.meshSdf
-    std::string pluginDir;        // empty: none
-    std::string shading;          // override: cook-torrance | blinn-phong
-    std::string toneMapper;       // override: clamp | reinhard | aces
-    std::string quality;          // override: low | medium | high | reference (SDF trace preset)
-    std::string shadows;          // override: on | off | hard (render.shadows)
-    std::string ao;               // override: off | five-tap | multi-ray | cones (render.ao.variant)
-    std::string debugView;        // empty: the scene's | none | normals | depth | albedo | steps |
-                                  // ids | field-slice
-    std::string slice;            // --slice AXIS=OFFSET | NX,NY,NZ,OFFSET; empty: the scene's
-    std::string aov;              // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
-    std::string traceMode;        // --trace-mode fullscreen|box|auto; empty: the scene's
-    std::string accel;            // --accel all | none | culling,cache,id,prepass; empty: the scene's
-    std::string taa;              // override: on | off (render.taa)
-    std::string motionBlur;       // override: on | off (render.motionBlur.enabled)
+    std::string meshSdf;     // --mesh-sdf off | trace | occlusion | auto; empty: the scene's render.meshSdf
+    std::string pluginDir;   // empty: none
+    std::string shading;     // override: cook-torrance | blinn-phong
+    std::string toneMapper;  // override: clamp | reinhard | aces
+    std::string quality;     // override: low | medium | high | reference (SDF trace preset)
+    std::string shadows;     // override: on | off | hard (render.shadows)
+    std::string ao;          // override: off | five-tap | multi-ray | cones (render.ao.variant)
+    std::string debugView;   // empty: the scene's | none | normals | depth | albedo | steps |
+                             // ids | field-slice
+    std::string slice;       // --slice AXIS=OFFSET | NX,NY,NZ,OFFSET; empty: the scene's
+    std::string aov;         // --aov NAME=PATH.pfm,... (aov_output.h); empty: none
+    std::string traceMode;   // --trace-mode fullscreen|box|auto; empty: the scene's
+    std::string accel;       // --accel all | none | culling,cache,id,prepass; empty: the scene's
+    std::string taa;         // override: on | off (render.taa)
+    std::string motionBlur;  // override: on | off (render.motionBlur.enabled)
 };
 
 CLI::App* addRenderCommand(CLI::App& app, RenderOptions& opt);
