@@ -219,25 +219,15 @@ int runScene(const BenchObjectsOptions& opt, rhi::Backend backend, bool instance
         log::error("bench objects: {}", error);
         return 1;
     }
-    EngineDesc engineDesc;
-    engineDesc.cacheDir = cacheDir;
-    std::unique_ptr<Engine> engine = Engine::create(engineDesc, error);
-    if (!engine || !engine->loadScene(path, error)) {
-        log::error("bench objects: {}", error);
-        return 1;
-    }
-    if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, engine->settings().quality);
-    RendererDesc rendererDesc;
-    rendererDesc.backend = backend;
-    rendererDesc.width = opt.width;
-    rendererDesc.height = opt.height;
-    std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
-    if (!renderer || !refuseNullDevice(renderer->device(), "bench objects", error) ||
-        !checkImageSize(opt.width, opt.height, renderer->device(), "bench objects: --width/--height",
-                        error)) {
-        log::error("bench objects: {}", error);
-        return renderer ? 2 : 1;
-    }
+    std::unique_ptr<Engine> engine;
+    std::unique_ptr<Renderer> renderer;
+    const int rc = openObjectsBench(
+        path, cacheDir, backend, opt.width, opt.height, "bench objects",
+        [&](Engine& e) {
+            if (!opt.quality.empty()) scene::parseTraceQuality(opt.quality, e.settings().quality);
+        },
+        engine, renderer);
+    if (rc != 0) return rc;
     table.device = renderer->device().info().deviceName;
     const ecs::Entity mover = opt.moving ? entityNamed(engine->world(), "object 0") : ecs::kNullEntity;
     Sink sink;
@@ -328,20 +318,8 @@ namespace {
 
 bool parseRunOptions(const BenchObjectsOptions& opt, std::vector<uint32_t>& counts,
                      std::vector<Config>& configs, std::vector<rhi::Backend>& backends, std::string& error) {
+    if (!parseObjectCounts(opt.counts, counts, error)) return false;
     std::vector<std::string> words;
-    if (!splitList(opt.counts, words)) {
-        error = fmt::format("--counts '{}': expected comma-separated object counts", opt.counts);
-        return false;
-    }
-    for (const std::string& w : words) {
-        char* end = nullptr;
-        const unsigned long n = std::strtoul(w.c_str(), &end, 10);
-        if (*end != '\0' || w[0] == '-' || n < 1 || n > scene::kMaxObjectsSceneCount) {
-            error = fmt::format("--counts: '{}' is not a count in [1, {}]", w, scene::kMaxObjectsSceneCount);
-            return false;
-        }
-        counts.push_back(uint32_t(n));
-    }
     if (!splitList(opt.configs, words)) {
         error = fmt::format("--configs '{}': expected a comma-separated list", opt.configs);
         return false;
@@ -359,13 +337,62 @@ bool parseRunOptions(const BenchObjectsOptions& opt, std::vector<uint32_t>& coun
         error = fmt::format("--backend '{}': use vulkan, gl or both", opt.backend);
         return false;
     }
+    return checkObjectsMeshes(opt.meshDir, error);
+}
+
+}  // namespace
+
+bool parseObjectCounts(const std::string& text, std::vector<uint32_t>& counts, std::string& error) {
+    std::vector<std::string> words;
+    if (!splitList(text, words)) {
+        error = fmt::format("--counts '{}': expected comma-separated object counts", text);
+        return false;
+    }
+    for (const std::string& w : words) {
+        char* end = nullptr;
+        const unsigned long n = std::strtoul(w.c_str(), &end, 10);
+        if (*end != '\0' || w[0] == '-' || n < 1 || n > scene::kMaxObjectsSceneCount) {
+            error = fmt::format("--counts: '{}' is not a count in [1, {}]", w, scene::kMaxObjectsSceneCount);
+            return false;
+        }
+        counts.push_back(uint32_t(n));
+    }
+    return true;
+}
+
+bool checkObjectsMeshes(const std::string& meshDir, std::string& error) {
     for (const char* f : {"bunny.ply", "teapot.ply", "dragon_vrip_res3.ply"})
-        if (!checkInputFile(opt.meshDir + "/" + f, "mesh (fetched by tools/fetch_meshes.sh)", error))
+        if (!checkInputFile(meshDir + "/" + f, "mesh (fetched by tools/fetch_meshes.sh)", error))
             return false;
     return true;
 }
 
-}  // namespace
+int openObjectsBench(const std::string& path, const std::string& cacheDir, rhi::Backend backend,
+                     uint32_t width, uint32_t height, const char* command,
+                     const std::function<void(Engine&)>& configure, std::unique_ptr<Engine>& engine,
+                     std::unique_ptr<Renderer>& renderer) {
+    std::string error;
+    EngineDesc engineDesc;
+    engineDesc.cacheDir = cacheDir;
+    engine = Engine::create(engineDesc, error);
+    if (!engine || !engine->loadScene(path, error)) {
+        log::error("{}: {}", command, error);
+        return 1;
+    }
+    if (configure) configure(*engine);
+    RendererDesc rendererDesc;
+    rendererDesc.backend = backend;
+    rendererDesc.width = width;
+    rendererDesc.height = height;
+    renderer = Renderer::create(*engine, rendererDesc, error);
+    if (!renderer || !refuseNullDevice(renderer->device(), command, error) ||
+        !checkImageSize(width, height, renderer->device(), fmt::format("{}: --width/--height", command),
+                        error)) {
+        log::error("{}: {}", command, error);
+        return renderer ? 2 : 1;
+    }
+    return 0;
+}
 
 int runBenchObjects(const BenchObjectsOptions& opt) {
     std::string error;

@@ -19,9 +19,15 @@
 #pragma once
 
 #include <cstdint>
+#include <functional>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
+
+#include "engine/engine.h"
+#include "renderer/renderer.h"
 
 namespace penumbra::cli {
 
@@ -49,5 +55,18 @@ struct BenchObjectsOptions {
 
 CLI::App* addBenchObjectsCommand(CLI::App& group, BenchObjectsOptions& opt);
 int runBenchObjects(const BenchObjectsOptions& opt);
+
+// What the benchmarks on the generated objects scene share (bench objects, bench trace-modes):
+// --counts (comma-separated, each 1 .. scene::kMaxObjectsSceneCount), false with `error`;
+bool parseObjectCounts(const std::string& text, std::vector<uint32_t>& counts, std::string& error);
+// the scene's three meshes in `meshDir` (tools/fetch_meshes.sh), false with `error` naming the missing one;
+bool checkObjectsMeshes(const std::string& meshDir, std::string& error);
+// a fresh engine on the scene file `path`, `configure` applied to it, and a renderer of
+// `width` x `height` on `backend` (not the null device). 0, or after logging "<command>: <error>"
+// the exit code: 2 for a size the device refuses, 1 otherwise.
+int openObjectsBench(const std::string& path, const std::string& cacheDir, rhi::Backend backend,
+                     uint32_t width, uint32_t height, const char* command,
+                     const std::function<void(Engine&)>& configure, std::unique_ptr<Engine>& engine,
+                     std::unique_ptr<Renderer>& renderer);
 
 }  // namespace penumbra::cli

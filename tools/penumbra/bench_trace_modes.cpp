@@ -1,6 +1,8 @@
 // `penumbra bench trace-modes` (bench_trace_modes.h): full-screen vs box tracing over N.
 #include "bench_trace_modes.h"
 
+#include "bench_objects.h"
+
 #include <unistd.h>
 
 #include <cmath>
@@ -88,26 +90,16 @@ int runCount(const BenchTraceModesOptions& opt, rhi::Backend backend, uint32_t c
         log::error("bench trace-modes: {}", error);
         return 1;
     }
-    EngineDesc engineDesc;
-    engineDesc.cacheDir = cacheDir;
-    std::unique_ptr<Engine> engine = Engine::create(engineDesc, error);
-    if (!engine || !engine->loadScene(path, error)) {
-        log::error("bench trace-modes: {}", error);
-        return 1;
-    }
-    engine->settings().shadows.enabled = false;  // Table 7: the primary trace only
-    engine->settings().ao.variant = scene::AoVariant::Off;
-    RendererDesc rendererDesc;
-    rendererDesc.backend = backend;
-    rendererDesc.width = opt.width;
-    rendererDesc.height = opt.height;
-    std::unique_ptr<Renderer> renderer = Renderer::create(*engine, rendererDesc, error);
-    if (!renderer || !refuseNullDevice(renderer->device(), "bench trace-modes", error) ||
-        !checkImageSize(opt.width, opt.height, renderer->device(), "bench trace-modes: --width/--height",
-                        error)) {
-        log::error("bench trace-modes: {}", error);
-        return renderer ? 2 : 1;
-    }
+    std::unique_ptr<Engine> engine;
+    std::unique_ptr<Renderer> renderer;
+    const int rc = openObjectsBench(
+        path, cacheDir, backend, opt.width, opt.height, "bench trace-modes",
+        [](Engine& e) {
+            e.settings().shadows.enabled = false;  // Table 7: the primary trace only
+            e.settings().ao.variant = scene::AoVariant::Off;
+        },
+        engine, renderer);
+    if (rc != 0) return rc;
     table.device = renderer->device().info().deviceName;
     fmt::print(stderr, "[{}] {} objects: {} warm-up + {} timed frames per mode\n", rhi::toString(backend),
                count, opt.warmup, opt.frames);
@@ -237,30 +229,19 @@ CLI::App* addBenchTraceModesCommand(CLI::App& group, BenchTraceModesOptions& opt
 int runBenchTraceModes(const BenchTraceModesOptions& opt) {
     std::string error;
     std::vector<uint32_t> counts;
-    size_t start = 0;
-    while (start <= opt.counts.size()) {
-        const size_t comma = std::min(opt.counts.find(',', start), opt.counts.size());
-        const std::string w = opt.counts.substr(start, comma - start);
-        char* end = nullptr;
-        const unsigned long n = std::strtoul(w.c_str(), &end, 10);
-        if (w.empty() || *end != '\0' || w[0] == '-' || n < 1 || n > scene::kMaxObjectsSceneCount) {
-            log::error("bench trace-modes: --counts: '{}' is not a count in [1, {}]", w,
-                       scene::kMaxObjectsSceneCount);
-            return 2;
-        }
-        counts.push_back(uint32_t(n));
-        start = comma + 1;
+    if (!parseObjectCounts(opt.counts, counts, error)) {
+        log::error("bench trace-modes: {}", error);
+        return 2;
     }
     std::vector<rhi::Backend> backends;
     if (!benchBackends(opt.backend, backends)) {
         log::error("bench trace-modes: --backend '{}': use vulkan, gl or both", opt.backend);
         return 2;
     }
-    for (const char* f : {"bunny.ply", "teapot.ply", "dragon_vrip_res3.ply"})
-        if (!checkInputFile(opt.meshDir + "/" + f, "mesh (fetched by tools/fetch_meshes.sh)", error)) {
-            log::error("bench trace-modes: {}", error);
-            return 1;
-        }
+    if (!checkObjectsMeshes(opt.meshDir, error)) {
+        log::error("bench trace-modes: {}", error);
+        return 1;
+    }
     OutputFiles outputs;
     if (!prepareOutputs(outputs, {opt.csv, opt.markdown}, "bench trace-modes")) return 1;
     const std::string cacheDir =
