@@ -132,15 +132,8 @@ TEST(MotionBlurParity, VulkanMatchesOpenGL) {
     ASSERT_TRUE(blurredFrame(*glDevice, scene, true, gl, error)) << error;
     EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
     EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
-    const ImageDiff d = compareImages(vk, gl);
+    const ImageDiff d = compareBackends("motion_blur", vk, gl);
     std::printf("Vulkan vs OpenGL, motion blur: %s\n", d.summary().c_str());
-    if (!d.pass) {
-        const std::string dir = goldenOutDir("parity");
-        std::filesystem::create_directories(dir);
-        writePng(dir + "/motion_blur.vulkan.png", vk);
-        writePng(dir + "/motion_blur.gl.png", gl);
-        writePng(dir + "/motion_blur.diff.png", d.diffImage);
-    }
     EXPECT_TRUE(d.pass) << d.summary();
 }
 

@@ -59,6 +59,19 @@ std::string goldenOutDir(const std::string& backend) {
     return std::string(PENUMBRA_BINARY_DIR) + "/golden_out/" + backend;
 }
 
+ImageDiff compareBackends(const std::string& name, const ImageRGBA8& vulkan, const ImageRGBA8& gl,
+                          const ImageRule& rule) {
+    ImageDiff d = compareImages(vulkan, gl, rule);
+    if (!d.pass) {
+        const std::string dir = goldenOutDir("parity");
+        std::filesystem::create_directories(dir);
+        writePng(dir + "/" + name + ".vulkan.png", vulkan);
+        writePng(dir + "/" + name + ".gl.png", gl);
+        if (!d.sizeMismatch) writePng(dir + "/" + name + ".diff.png", d.diffImage);
+    }
+    return d;
+}
+
 std::string checkGolden(const std::string& backend, const std::string& name, const ImageRGBA8& actual,
                         const ImageRule& rule) {
     const std::string outDir = goldenOutDir(backend);

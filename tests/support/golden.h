@@ -37,6 +37,11 @@ ImageDiff compareImages(const ImageRGBA8& actual, const ImageRGBA8& expected, co
 std::string checkGolden(const std::string& backend, const std::string& name, const ImageRGBA8& actual,
                         const ImageRule& rule = {});
 
+// Vulkan against OpenGL (parity) by `rule`; when they differ beyond it, writes
+// <build>/golden_out/parity/<name>.vulkan.png, .gl.png and .diff.png for review.
+ImageDiff compareBackends(const std::string& name, const ImageRGBA8& vulkan, const ImageRGBA8& gl,
+                          const ImageRule& rule = {});
+
 std::string goldenPath(const std::string& backend, const std::string& name);
 std::string goldenOutDir(const std::string& backend);
 
