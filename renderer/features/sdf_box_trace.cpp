@@ -10,6 +10,7 @@
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
 #include "renderer/features/mesh_gbuffer.h"
+#include "renderer/features/sdf_trace.h"
 
 namespace penumbra::render {
 
@@ -141,12 +142,7 @@ SdfBoxTraceReport addSdfBoxTrace(FrameContext& fc, const SdfBoxTraceDesc& desc) 
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
-    const bool fields = sdfScene.atlas.isValid();
-    using V = program::Variant;
-    static constexpr V kVariants[8] = {
-        V::Default,   V::Albedo,          V::Aux,          V::AlbedoAux,
-        V::SdfFields, V::AlbedoSdfFields, V::AuxSdfFields, V::AlbedoAuxSdfFields};
-    const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (fields ? 4 : 0)];
+    const auto variant = traceVariant<program::Variant>(gbuffer, sdfScene);
     const rhi::ShaderDesc& vs = program::vertex(variant);
     const rhi::ShaderDesc& fs = program::fragment(variant);
     const rhi::PipelineHandle pipeline = fc.cache.graphicsPipeline(vs, fs, pipelineDesc(albedo, aux));

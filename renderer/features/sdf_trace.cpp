@@ -35,12 +35,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
-    const bool fields = sdfScene.atlas.isValid();
-    using V = program::Variant;
-    static constexpr V kVariants[8] = {
-        V::Default,   V::Albedo,          V::Aux,          V::AlbedoAux,
-        V::SdfFields, V::AlbedoSdfFields, V::AuxSdfFields, V::AlbedoAuxSdfFields};
-    const V variant = kVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (fields ? 4 : 0)];
+    const auto variant = traceVariant<program::Variant>(gbuffer, sdfScene);
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);

@@ -40,6 +40,7 @@
 
 #include "engine/scene/scene.h"
 #include "renderer/features/frame_context.h"
+#include "renderer/features/sdf_scene.h"
 
 namespace penumbra::render {
 
@@ -57,5 +58,16 @@ struct SdfTraceDesc {
 // and, when present and enabled, SdfCullLists::primary and SdfWorldCacheView; reads and writes the
 // GBuffer as storage images.
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc);
+
+// The ALBEDO x AUX x SDF_FIELDS variant of a trace program (sdf_trace, sdf_box_trace: each has
+// its own generated Variant enum with these names) for the frame's G-buffer and field atlas.
+template <class V>
+V traceVariant(const GBuffer& gbuffer, const SdfSceneBuffers& sdf) {
+    static constexpr V kVariants[8] = {
+        V::Default,   V::Albedo,          V::Aux,          V::AlbedoAux,
+        V::SdfFields, V::AlbedoSdfFields, V::AuxSdfFields, V::AlbedoAuxSdfFields};
+    return kVariants[(gbuffer.albedo.isValid() ? 1 : 0) | (gbuffer.aux.isValid() ? 2 : 0) |
+                     (sdf.atlas.isValid() ? 4 : 0)];
+}
 
 }  // namespace penumbra::render
