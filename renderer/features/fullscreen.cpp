@@ -39,12 +39,19 @@ void setGBuffer(ShaderParams& params, const fg::PassContext& ctx, const GBuffer&
 
 void beginFullscreen(fg::PassContext& ctx, fg::TextureRef target, rhi::PipelineHandle pipeline,
                      const char* name) {
-    const rhi::TextureDesc& size = ctx.textureDesc(target);
-    rhi::ColorAttachment a;
-    a.texture = ctx.texture(target);
-    a.load = rhi::LoadOp::DontCare;  // every pixel is written
+    beginFullscreen(ctx, {target}, pipeline, name);
+}
+
+void beginFullscreen(fg::PassContext& ctx, std::initializer_list<fg::TextureRef> targets,
+                     rhi::PipelineHandle pipeline, const char* name) {
+    const rhi::TextureDesc& size = ctx.textureDesc(*targets.begin());
     rhi::RenderPassDesc rp;
-    rp.colorAttachments = {a};
+    for (fg::TextureRef target : targets) {
+        rhi::ColorAttachment a;
+        a.texture = ctx.texture(target);
+        a.load = rhi::LoadOp::DontCare;  // every pixel is written
+        rp.colorAttachments.push_back(a);
+    }
     rp.debugName = name;
     ctx.cmd.beginRenderPass(rp);
     ctx.cmd.setViewport({0, 0, float(size.width), float(size.height), 0, 1});

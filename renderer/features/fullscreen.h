@@ -3,6 +3,8 @@
 // sampler, the G-buffer declarations and parameters, and the render pass around one triangle.
 #pragma once
 
+#include <initializer_list>
+
 #include "renderer/core/shader_params.h"
 #include "renderer/features/frame_context.h"
 
@@ -29,6 +31,9 @@ void setGBuffer(ShaderParams& params, const fg::PassContext& ctx, const GBuffer&
 // full-screen raster pass. End with drawFullscreen().
 void beginFullscreen(fg::PassContext& ctx, fg::TextureRef target, rhi::PipelineHandle pipeline,
                      const char* name);
+// The same over several colour targets of one size (the fragment stage's outputs 0, 1, ...).
+void beginFullscreen(fg::PassContext& ctx, std::initializer_list<fg::TextureRef> targets,
+                     rhi::PipelineHandle pipeline, const char* name);
 // Binds `params`, draws the full-screen triangle (renderer/shaders/fullscreen.glsl) and ends the
 // render pass (a failed bind draws nothing: the error is logged).
 void drawFullscreen(fg::PassContext& ctx, ShaderParams& params, GpuCache& cache,

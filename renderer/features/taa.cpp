@@ -31,9 +31,9 @@ bool TaaHistory::begin(fg::FrameGraph& graph, uint32_t width, uint32_t height, b
     if (!m_targets[0]) {
         using TU = rhi::TextureUsage;
         m_bytes = 0;
-        for (uint32_t i = 0; i < 2; ++i) {
-            rhi::TextureDesc d = renderTargetDesc(rhi::Format::RGBA16_FLOAT, width, height,
-                                                  i == 0 ? "taa.history0" : "taa.history1",
+        static const char* const kNames[4] = {"taa.history0", "taa.history1", "taa.raw0", "taa.raw1"};
+        for (uint32_t i = 0; i < 4; ++i) {
+            rhi::TextureDesc d = renderTargetDesc(rhi::Format::RGBA16_FLOAT, width, height, kNames[i],
                                                   TU::ColorTarget | TU::Sampled | TU::CopySrc);
             m_targets[i] = m_device.createTexture(d);
             if (!m_targets[i]) {
@@ -74,10 +74,10 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
     namespace program = shaders::taa;
     struct Data {
         fg::BufferRef view;
-        fg::TextureRef color, depth, velocity, history, out;
+        fg::TextureRef color, depth, velocity, history, rawHistory, out, rawOut;
     };
     rhi::GraphicsPipelineDesc pd;
-    pd.colorFormats = {rhi::Format::RGBA16_FLOAT};
+    pd.colorFormats = {rhi::Format::RGBA16_FLOAT, rhi::Format::RGBA16_FLOAT};
     const rhi::PipelineHandle pipeline =
         fc.cache.graphicsPipeline(program::vertex(), program::fragment(), pd);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
@@ -90,6 +90,10 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
         fc.graph.importPersistent("taa.history", m_targets[m_write ^ 1u], rhi::Access::ShaderSampled);
     const fg::TextureRef target =
         fc.graph.importPersistent("taa.resolved", m_targets[m_write], rhi::Access::ShaderSampled);
+    const fg::TextureRef rawHistory = fc.graph.importPersistent(
+        "taa.rawHistory", m_targets[2 + (m_write ^ 1u)], rhi::Access::ShaderSampled);
+    const fg::TextureRef rawTarget =
+        fc.graph.importPersistent("taa.raw", m_targets[2 + m_write], rhi::Access::ShaderSampled);
     fg::TextureRef resolved;
     fc.graph.addPass<Data>(
         "taa", fg::PassKind::Raster,
@@ -100,17 +104,20 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
             d.depth = b.read(gb.depth, rhi::Access::ShaderSampled);
             d.velocity = b.read(gb.velocity, rhi::Access::ShaderSampled);
             d.history = b.read(history, rhi::Access::ShaderSampled);
+            d.rawHistory = b.read(rawHistory, rhi::Access::ShaderSampled);
             d.out = b.write(target, rhi::Access::ColorTarget);
+            d.rawOut = b.write(rawTarget, rhi::Access::ColorTarget);
             resolved = d.out;
         },
         [&cache = fc.cache, pipeline, nearest, linear, push](const Data& d, fg::PassContext& ctx) {
-            beginFullscreen(ctx, d.out, pipeline, "taa");
+            beginFullscreen(ctx, {d.out, d.rawOut}, pipeline, "taa");
             ShaderParams params(program::vertex(), program::fragment());
             params.set("View", ctx.buffer(d.view))
                 .set("sceneColor", ctx.texture(d.color), nearest)
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferVelocity", ctx.texture(d.velocity), nearest)
-                .set("history", ctx.texture(d.history), linear);
+                .set("history", ctx.texture(d.history), linear)
+                .set("rawHistory", ctx.texture(d.rawHistory), nearest);
             ctx.cmd.pushConstants(&push, sizeof(push));
             drawFullscreen(ctx, params, cache, pipeline);
         });

@@ -5,7 +5,9 @@
 // with the persistent history:
 //   - reprojection by gbuffer.velocity (per-object and camera motion, jitter removed) of the nearest
 //     surface in the 3x3 neighbourhood (background: camera rotation), bilinear history resampling;
-//   - the history clipped to this frame's 3x3 neighbourhood box in YCoCg;
+//   - the history clipped to a YCoCg box around this frame's 3x3 neighbourhood and the previous
+//     frame's raw samples at the reprojected point (a sub-pixel surface this frame's samples missed
+//     but the previous frame's hit keeps its history);
 //   - history rejection on disocclusion (depth kept in the history's alpha), and Wright 2015's
 //     unstable pixels: a rejected pixel takes its blurred surroundings, not its aliased sample;
 //   - the history restarts (the frame shows its own jittered sample) on a size change, a camera
@@ -26,16 +28,19 @@ inline constexpr uint32_t kTaaJitterPhases = 16;
 inline constexpr float kTaaCurrentWeight = 0.1f;  // exponential blend weight of each new frame
 // The weight of each new frame where the surface moves >= 0.25 pixels per frame (taa.frag
 // kTaaFullMotion; linear in between): on the TAA test's camera path the error ratio went from 0.81
-// (0.1 everywhere) to 0.66; a still camera's frames keep 0.1.
-inline constexpr float kTaaMovingWeight = 0.35f;
+// (0.1 everywhere) to 0.66 (0.35), and with the raw samples in the clipping box from 0.626 (0.35)
+// to 0.608 (0.5; 0.2: 0.72, 0.7: 0.71); a still camera's frames keep 0.1.
+inline constexpr float kTaaMovingWeight = 0.5f;
 inline constexpr float kTaaDepthTolerance = 0.05f;  // relative depth change still the same surface
 
 // The jitter of frame `index`, in pixels within (-0.5, 0.5):
 // the Halton(2, 3) point (index % 16) + 1 minus 0.5.
 glm::vec2 taaJitter(uint32_t index);
 
-// The history: two RGBA16F targets (this frame writes one and reads the other), rgb the resolved
-// colour, a the linear depth of the pixel (0: background). Owned by the SceneRenderer.
+// The history: two pairs of RGBA16F targets (this frame writes one of each pair and reads the
+// other): the resolved colour (rgb) with the linear depth of the pixel (a, 0: background), and the
+// frame's raw jittered samples (rgb), which widen the next frame's clipping box. Owned by the
+// SceneRenderer.
 class TaaHistory {
 public:
     explicit TaaHistory(rhi::Device& device) : m_device(device) {}
@@ -58,7 +63,7 @@ public:
 
 private:
     rhi::Device& m_device;
-    rhi::TextureHandle m_targets[2];
+    rhi::TextureHandle m_targets[4];  // [0..1] resolved + depth, [2..3] raw samples
     uint32_t m_width = 0, m_height = 0;
     uint32_t m_write = 0;    // the target this frame writes; the other holds the history
     uint32_t m_samples = 0;  // frames accumulated in the history

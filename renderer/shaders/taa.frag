@@ -1,15 +1,15 @@
 // taa, fragment stage: temporal anti-aliasing (renderer/features/taa.h). Per pixel: the 3x3
-// neighbourhood of this frame's linear colour in YCoCg (its box clips the history, Karis 2014;
-// the PlayDead TAA mTec 8.2.11 ports), the motion of the nearest surface in that neighbourhood
+// neighbourhood of this frame's linear colour in YCoCg, widened by the previous frame's raw samples
+// at the reprojected point (the box clips the history, Karis 2014; the PlayDead TAA mTec 8.2.11
+// ports), the motion of the nearest surface in that neighbourhood
 // (gbuffer.velocity is current - previous in jittered pixels: adding this frame's jitter and
 // removing the previous one's gives the surface's motion; background: the camera's rotation), the
 // history resampled there (bilinear: on the TAA test path it gave a lower error than Catmull-Rom,
 // whose ringing the high-contrast edges keep), history rejection on disocclusion (the surface's
 // expected previous depth outside the range of the history depths around the reprojected point),
-// and
-// Wright 2015's unstable pixels: a rejected pixel is filled with its blurred surroundings (a 3x3
-// tent of this frame) instead of its aliased sample. Output: rgb the resolved colour, a this
-// pixel's linear depth (0 = background) for the next frame's rejection test.
+// and Wright 2015's unstable pixels: a rejected pixel is filled with its blurred surroundings (a 3x3
+// tent of this frame) instead of its aliased sample. Outputs: rgb the resolved colour, a this
+// pixel's linear depth (0 = background) for the next frame's rejection test; this frame's raw sample.
 #version 450
 #include "view.glsl"
 
@@ -17,6 +17,7 @@ layout(set = 2, binding = 0) uniform sampler2D sceneColor;
 layout(set = 2, binding = 1) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 2) uniform sampler2D gbufferVelocity;
 layout(set = 2, binding = 3) uniform sampler2D history;  // bilinear, clamped
+layout(set = 2, binding = 4) uniform sampler2D rawHistory;  // the previous frame's raw samples (rgb)
 
 layout(push_constant) uniform Taa {
     // x 1 = the history is valid, y weight of this frame (still surface), z relative depth tolerance,
@@ -31,6 +32,7 @@ const float kTaaFullMotion = 0.25;
 
 layout(location = 0) in vec2 vUv;
 layout(location = 0) out vec4 outColor;
+layout(location = 1) out vec4 outRaw;  // rgb this frame's raw sample, the next frame's rawHistory
 
 vec3 toYCoCg(vec3 c) {
     return vec3(0.25 * c.r + 0.5 * c.g + 0.25 * c.b, 0.5 * c.r - 0.5 * c.b, -0.25 * c.r + 0.5 * c.g - 0.25 * c.b);
@@ -54,6 +56,7 @@ void main() {
     ivec2 size = ivec2(view.viewport.xy);
     vec3 current = texelFetch(sceneColor, pixel, 0).rgb;
     float depth = texelFetch(gbufferDepth, pixel, 0).r;
+    outRaw = vec4(current, 0.0);
 
     vec3 lo = vec3(3.0e38), hi = vec3(-3.0e38), blurred = vec3(0.0);
     float nearest = 3.0e38;
@@ -119,6 +122,17 @@ void main() {
     if (!match) {
         outColor = vec4(blurred, depth);  // unstable: the blurred surroundings (Wright 2015)
         return;
+    }
+    // The previous frame's raw samples around the reprojected point (its bilinear footprint) widen
+    // the box: a surface thinner than a pixel that this frame's jittered samples all missed, but the
+    // previous frame's hit, keeps its history instead of being clipped to what lies behind it.
+    ivec2 r0 = ivec2(floor(prev - 0.5));
+    for (int dy = 0; dy <= 1; ++dy) {
+        for (int dx = 0; dx <= 1; ++dx) {
+            vec3 y = toYCoCg(texelFetch(rawHistory, clamp(r0 + ivec2(dx, dy), ivec2(0), size - 1), 0).rgb);
+            lo = min(lo, y);
+            hi = max(hi, y);
+        }
     }
     vec3 h = fromYCoCg(clipToBox(lo, hi, toYCoCg(texture(history, prev / view.viewport.xy).rgb)));
     float weight = mix(taa.params.y, taa.params.w, clamp(length(motion) / kTaaFullMotion, 0.0, 1.0));
