@@ -52,6 +52,7 @@ struct TaaScene {
         bool taa = false;
         bool motionBlur = false;
         bool resetHistory = false;
+        bool effects = false;  // sun shadows (half resolution) and cone AO (quarter resolution) on
     };
     bool render(render::SceneRenderer& r, uint32_t width, uint32_t height, const Options& o, ImageRGBA8& out,
                 std::string& error) {
@@ -63,6 +64,10 @@ struct TaaScene {
         f.settings.motionBlur.enabled = o.motionBlur;
         f.camera = camera;
         f.resetHistory = o.resetHistory;
+        if (o.effects) {
+            f.settings.shadows.enabled = true;
+            f.settings.ao.variant = scene::AoVariant::Cones;
+        }
         return r.render(engine->world(), engine->assets(), f, error) && r.readPixels(out, error);
     }
 };
@@ -71,6 +76,10 @@ inline TaaScene::Options withTaa(bool resetHistory = false) {
     TaaScene::Options o;
     o.taa = true;
     o.resetHistory = resetHistory;
+    return o;
+}
+inline TaaScene::Options withEffects(TaaScene::Options o) {
+    o.effects = true;
     return o;
 }
 inline TaaScene::Options withMotionBlur(bool on) {
@@ -119,12 +128,18 @@ inline double meanSquaredError(const ImageRGBA8& image, const std::vector<float>
 }
 
 // Mean absolute difference of the RGB values, in 8-bit steps.
-inline double meanAbsoluteDifference(const ImageRGBA8& a, const ImageRGBA8& b) {
+// Mean absolute difference in 8-bit steps over RGB, over the pixels `mask` selects (all if empty).
+inline double meanAbsoluteDifference(const ImageRGBA8& a, const ImageRGBA8& b,
+                                     const std::vector<uint8_t>& mask = {}) {
     double sum = 0.0;
+    size_t count = 0;
     const size_t n = size_t(a.width) * a.height;
-    for (size_t p = 0; p < n; ++p)
+    for (size_t p = 0; p < n; ++p) {
+        if (!mask.empty() && !mask[p]) continue;
         for (size_t c = 0; c < 3; ++c) sum += std::abs(int(a.pixels[p * 4 + c]) - int(b.pixels[p * 4 + c]));
-    return sum / double(n * 3);
+        ++count;
+    }
+    return count ? sum / double(count * 3) : 0.0;
 }
 
 }  // namespace penumbra::test
