@@ -161,7 +161,6 @@ std::string entityName(ecs::Entity e) { return fmt::format("entity {}v{}", e.ind
 }  // namespace
 
 struct SceneRenderer::Impl {
-    bool warnedPrepass = false;  // render.acceleration.prepass asked for once
     scene::TraceMode lastTraceMode = scene::TraceMode::Fullscreen;  // the mode buildGraph ran
     SdfBoxTraceReport lastBoxTrace;                                 // its draws (box mode)
     double lastBoxCoverage = 0.0;                                   // boxCoverage of the traced objects
@@ -1010,12 +1009,6 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
 // is on and the frame has SDF objects; otherwise its textures are freed.
 void SceneRenderer::Impl::addWorldCache(FrameContext& fc, const FrameDesc& desc, const CameraSetup& cam) {
     const scene::AccelerationSettings& accel = desc.settings.acceleration;
-    if (accel.prepass && !warnedPrepass) {
-        warnedPrepass = true;
-        log::warn(
-            "scene renderer: render.acceleration.prepass: the cone prepass (optional, issue 13 item 6) "
-            "is not implemented yet; frames are traced without it");
-    }
     std::string why;
     if (!(accel.worldCache || accel.idField) || sdfData.objects.empty())
         worldCache.release(graph);

@@ -1,5 +1,6 @@
 #include "renderer/features/sdf_trace.h"
 
+#include <shaders/sdf_cone_prepass.h>
 #include <shaders/sdf_trace.h>
 
 #include "renderer/core/shader_params.h"
@@ -19,7 +20,65 @@ enum : uint32_t {
     kTileListsFlag = 8,
     kCountEvalsFlag = 16,
     kCacheBoundFlag = 32,
+    kPrepassFlag = 64,
 };
+
+// "sdf_cone_prepass" (issue 13 item 6): per 8x8 tile of the frame the start of its rays, from
+// one conservative cone around them (sdf_cone_prepass.comp). Returns the per-tile buffer
+// (uvec2: start bits, evaluations), tilesX * tilesY entries: it follows the frame's size.
+fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const SdfTileLists& lists,
+                             uint32_t tilesX, uint32_t tilesY) {
+    namespace program = shaders::sdf_cone_prepass;
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        SdfTileLists tiles;
+        fg::BufferRef starts;
+    };
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    const rhi::ShaderDesc& cs =
+        program::compute(sdfScene.atlas.isValid() ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
+    const scene::TraceSettings& s = desc.settings;
+    const program::PushConstants push{glm::uvec4(sdfScene.tracedCount, tilesX, tilesY, s.maxSteps),
+                                      glm::vec4(s.hitEpsilon, s.fieldSafety, 0.0f, 0.0f),
+                                      glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f),
+                                      glm::uvec4(lists.valid() ? 1u : 0u, lists.tilesX, 0u, 0u)};
+    fg::BufferRef starts;
+    fc.graph.addPass<Data>(
+        "sdf_cone_prepass", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Data& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.tiles = lists;
+            rhi::BufferDesc bd;
+            bd.size = uint64_t(tilesX) * tilesY * 2 * sizeof(uint32_t);
+            bd.debugName = "sdf.tile_starts";
+            d.starts = b.write(b.createBuffer("sdf.tile_starts", bd), rhi::Access::ShaderWrite);
+            starts = d.starts;
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            readSdfScene(b, d.sdf);
+            if (d.tiles.valid()) {
+                b.read(d.tiles.ranges, rhi::Access::ShaderRead);
+                b.read(d.tiles.indices, rhi::Access::ShaderRead);
+            }
+        },
+        [&cache = fc.cache, &cs, pipeline, sampler, push, tilesX, tilesY](const Data& d,
+                                                                          fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
+            params.set("View", ctx.buffer(d.scene.view)).set("SdfTileStarts", ctx.buffer(d.starts));
+            setSdfScene(params, ctx, d.sdf, sampler);
+            const bool lists = d.tiles.valid();  // without lists a stand-in the shader never reads
+            params.set("SdfTileRanges", ctx.buffer(lists ? d.tiles.ranges : d.sdf.objects))
+                .set("SdfTileIndices", ctx.buffer(lists ? d.tiles.indices : d.sdf.objects));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
+            ctx.cmd.pushConstants(&push, sizeof(push));
+            dispatchOver(ctx.cmd, cs, tilesX, tilesY);
+        });
+    return starts;
+}
 
 }  // namespace
 
@@ -29,8 +88,9 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
         GBuffer gb;
-        SdfTileLists tiles;       // invalid: the shader loops over every traced object
-        SdfWorldCacheView cache;  // the world cache, or stand-ins the shader never samples
+        SdfTileLists tiles;        // invalid: the shader loops over every traced object
+        SdfWorldCacheView cache;   // the world cache, or stand-ins the shader never samples
+        fg::BufferRef tileStarts;  // the cone prepass's, or invalid (a stand-in is bound)
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
@@ -49,12 +109,15 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const uint32_t flags = (desc.accel.culling ? kCullFlag : 0u) | (tiles ? kTileListsFlag : 0u) |
                            (desc.countEvaluations ? kCountEvalsFlag : 0u) |
                            (desc.accel.worldCache ? kCacheFlag : 0u) | (desc.accel.idField ? kIdFlag : 0u) |
-                           (cacheBound ? kCacheBoundFlag : 0u);
+                           (cacheBound ? kCacheBoundFlag : 0u) | (desc.accel.prepass ? kPrepassFlag : 0u);
+    const uint32_t tilesX = (fc.width + 7) / 8, tilesY = (fc.height + 7) / 8;
+    const fg::BufferRef tileStarts =
+        desc.accel.prepass ? addConePrepass(fc, desc, tileLists, tilesX, tilesY) : fg::BufferRef{};
     const program::PushConstants push{
         glm::uvec4(sdfScene.tracedCount, desc.raster ? 1u : 0u, s.maxSteps, s.refineSteps),
         glm::vec4(s.hitEpsilon, s.normalEpsilon, s.overRelaxation, s.fieldSafety),
         glm::vec4(desc.nearPlane, desc.farPlane, desc.footprint, 0.0f),
-        glm::uvec4(flags, tileLists.tilesX, 0u, 0u)};
+        glm::uvec4(flags, tileLists.tilesX, tilesX, 0u)};
     const uint32_t width = fc.width, height = fc.height;
     fc.graph.addPass<Data>(
         "sdf_trace", fg::PassKind::Compute,
@@ -64,6 +127,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             d.gb = gbuffer;
             d.tiles = tileLists;
             d.cache = cacheIn;
+            if (tileStarts.isValid()) d.tileStarts = b.read(tileStarts, rhi::Access::ShaderRead);
             const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
             for (fg::TextureRef t :
                  {d.gb.depth, d.gb.normal, d.gb.material, d.gb.velocity, d.gb.albedo, d.gb.aux})
@@ -97,6 +161,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             params.set("SdfTileRanges", ctx.buffer(lists ? d.tiles.ranges : d.sdf.objects))
                 .set("SdfTileIndices", ctx.buffer(lists ? d.tiles.indices : d.sdf.objects));
             setSdfWorldCache(params, ctx, d.cache);
+            params.set("SdfTileStarts", ctx.buffer(d.tileStarts.isValid() ? d.tileStarts : d.sdf.objects));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);

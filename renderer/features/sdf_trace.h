@@ -36,6 +36,12 @@
 //   worldCache      (SdfWorldCacheView) plain safe steps of the cached world distance far from
 //                   surfaces (above two voxels and two hit epsilons), no object evaluated
 //   idField         near surfaces only the object the id field names for the point's cell
+//   prepass         the coarse-to-fine cone prepass (issue 13 item 6): the compute pass
+//                   "sdf_cone_prepass" (sdf_cone_prepass.comp, one invocation per 8x8 tile)
+//                   marches one conservative cone around each tile's rays over its tile list and
+//                   writes where it touched a surface (8 bytes per tile: start, evaluations); every
+//                   ray of the tile starts no nearer. Full-screen tracing only (box tracing starts
+//                   each fragment at its box)
 #pragma once
 
 #include "engine/scene/scene.h"
@@ -50,7 +56,7 @@ struct SdfTraceDesc {
     float nearPlane = 0.1f;             // linear depth where rays start
     float farPlane = 1000.0f;           // linear depth where rays end when no mesh is nearer
     float footprint = 0.0f;             // pixel size per unit distance: 2 / (height * proj[1][1])
-    scene::AccelerationSettings accel;  // culling, world cache, id field (prepass: not used here)
+    scene::AccelerationSettings accel;  // culling, world cache, id field, cone prepass
     bool countEvaluations = false;      // gbuffer.aux y = object evaluations instead of steps
 };
 

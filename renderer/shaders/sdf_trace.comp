@@ -48,6 +48,9 @@
 // count against the step limit); nearer, when the id field names a traced object for the point's
 // cell, that object alone is evaluated (it is the nearest everywhere in the cell); otherwise the
 // list (or every object). With ID but not CACHE only the id part is used.
+// Cone prepass (flag PREPASS; sdf_cone_prepass.comp ran before): every ray of an 8x8 tile starts no
+// nearer than where the tile's cone touched a surface; the hit decision does not depend on where
+// the march starts, so the picture stays.
 // gbuffer.aux y counts the steps that evaluated objects (at most the step limit; cache steps are
 // not counted), or (flag COUNT_EVALUATIONS, tests and benchmarks) the object distance evaluations
 // of the pixel: the work the acceleration saves.
@@ -76,6 +79,10 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SDF_CACHE_LEVELS_BINDING 14
 #include "sdf_world_cache.glsl"
 
+// Per 8x8 tile: x the ray distance its rays are empty up to (a float's bits), y the evaluations
+// the tile's cone took (sdf_cone_prepass.comp; flag PREPASS; tile index with trace.accel.z per row).
+layout(set = 2, binding = 15, std430) readonly buffer SdfTileStarts { uvec2 sdfTileStarts[]; };
+
 layout(set = 2, binding = 0, r32f) uniform image2D gbufferDepthImage;
 layout(set = 2, binding = 1, rg16f) uniform image2D gbufferNormalImage;
 layout(set = 2, binding = 2, rgba8) uniform image2D gbufferMaterialImage;
@@ -93,10 +100,12 @@ layout(push_constant) uniform SdfTrace {
     vec4 epsilons;   // x hit epsilon, y normal epsilon (pixel footprints), z over-relaxation omega,
                      // w field safety factor
     vec4 clip;       // x near, y far (linear depth), z pixel footprint per unit of distance
-    uvec4 accel;     // x acceleration flags (k*Flag below), y tiles per row of the tile lists
+    uvec4 accel;     // x acceleration flags (k*Flag below), y tiles per row of the tile lists,
+                     // z tiles per row of sdfTileStarts
 } trace;
 
 const uint kRasterFlag = 1u;
+const uint kPrepassFlag = 64u;  // sdfTileStarts holds this frame's cone prepass
 
 #include "sdf_march.glsl"
 
@@ -111,6 +120,10 @@ void main() {
     uint block = gl_LocalInvocationIndex / 8u, lane = gl_LocalInvocationIndex % 8u;
     ivec2 pixel = ivec2(gl_WorkGroupID.xy * 8u + uvec2(block % 4u * 2u + lane % 2u, block / 4u * 4u + lane / 2u));
     if (pixel.x >= int(view.viewport.x) || pixel.y >= int(view.viewport.y)) return;
+    // The cone prepass (sdf_cone_prepass.comp): every ray of the tile is empty up to its start.
+    bool prepass = (trace.accel.x & kPrepassFlag) != 0u;
+    uvec2 cone = prepass ? sdfTileStarts[sdfTileIndex(pixel, trace.accel.z)] : uvec2(0u);
+    float tileStart = uintBitsToFloat(cone.x);
     bool raster = (trace.counts.y & kRasterFlag) != 0u;
 
     // The ray through the pixel centre (moved by the TAA jitter, 0 without TAA); dir has unit
@@ -173,11 +186,13 @@ void main() {
     uint steps = 0u;
     bool hit = false;
     uint hitObject = 0xffffffffu;
-    float t = tStart;
-    if (crossed) hit = sdfMarch(ro, rd, tMin, tMax, stepLimit, t, hitObject, steps);
+    // The tile's cone is empty up to tileStart along every ray of the tile (the prepass).
+    float t = max(tStart, tileStart);
+    if (crossed && t <= tMax) hit = sdfMarch(ro, rd, tMin, tMax, stepLimit, t, hitObject, steps);
 
     vec3 p = ro + rd * t;
     if (hit) g_evaluations += 4u;  // the normal's tetrahedron
+    if (all(equal(pixel % 8, ivec2(0)))) g_evaluations += cone.y;  // the tile's cone, on its first pixel
     float work = float((trace.accel.x & kCountEvalsFlag) != 0u ? g_evaluations : steps);
     if (hit) {
         // Fields: at least half a voxel, so the gradient spans the trilinear cells around the

@@ -111,7 +111,7 @@ TEST(AccelOption, TurnsOnExactlyTheListedToggles) {
     EXPECT_EQ(a.cacheLevels, 3u);  // sizes untouched
     ASSERT_TRUE(cli::applyAccelOption("all", a, error));
     EXPECT_TRUE(a.culling && a.worldCache && a.idField);
-    EXPECT_FALSE(a.prepass);  // all = the implemented toggles (the prepass is not)
+    EXPECT_FALSE(a.prepass);  // all = the Table-2 toggles (the optional cone prepass is its own)
     ASSERT_TRUE(cli::applyAccelOption("none", a, error));
     EXPECT_FALSE(a.culling || a.worldCache || a.idField || a.prepass);
     ASSERT_TRUE(cli::applyAccelOption("prepass", a, error));

@@ -52,19 +52,31 @@ struct Config {
     scene::AccelerationSettings accel;
 };
 
+// A configuration: none, or toggles joined by '+' (culling, id, world, prepass, all = culling +
+// world + id), e.g. "culling+prepass".
 bool configNamed(const std::string& name, Config& out) {
     scene::AccelerationSettings a;
     a.culling = a.worldCache = a.idField = a.prepass = false;
-    if (name == "culling")
-        a.culling = true;
-    else if (name == "id")
-        a.idField = true;
-    else if (name == "world")
-        a.worldCache = true;
-    else if (name == "all")
-        a.culling = a.worldCache = a.idField = true;
-    else if (name != "none")
-        return false;
+    if (name != "none") {
+        size_t start = 0;
+        while (start <= name.size()) {
+            const size_t plus = std::min(name.find('+', start), name.size());
+            const std::string word = name.substr(start, plus - start);
+            if (word == "culling")
+                a.culling = true;
+            else if (word == "id")
+                a.idField = true;
+            else if (word == "world")
+                a.worldCache = true;
+            else if (word == "prepass")
+                a.prepass = true;
+            else if (word == "all")
+                a.culling = a.worldCache = a.idField = true;
+            else
+                return false;
+            start = plus + 1;
+        }
+    }
     out = {name, a};
     return true;
 }
@@ -269,8 +281,8 @@ CLI::App* addBenchObjectsCommand(CLI::App& group, BenchObjectsOptions& opt) {
     cmd->add_option(
            "--configs", opt.configs,
            "Configurations, comma-separated: none (every toggle off), culling, id (idField only), "
-           "world (worldCache only), all (culling + worldCache + idField); the optional cone prepass is "
-           "not implemented yet")
+           "world (worldCache only), all (culling + worldCache + idField), prepass (the cone prepass); "
+           "toggles joined by + combine (culling+prepass, all+prepass)")
         ->capture_default_str();
     addBenchBackendOption(cmd, opt.backend);
     addSizeOption(cmd, "--width", opt.width, "Image width in pixels")->capture_default_str();

@@ -8,7 +8,7 @@
 // For each backend, instancing mode and N it generates the objects scene (engine/scene/objects_scene.h),
 // loads it like `penumbra render` does and, per configuration (none: every toggle off, mTec's
 // baseline; culling; id = idField only; world = worldCache only; all = culling + worldCache +
-// idField; optional prepass = all + the cone prepass), renders W warm-up then F timed frames and
+// idField; prepass = the cone prepass; names joined by + combine, e.g. culling+prepass), renders W warm-up then F timed frames and
 // takes per pass the median GPU ms. Passes are charged by name: trace = sdf_trace + the passes that
 // exist only for the acceleration (sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter and
 // sdf_trace_* stand-ins; each group also its own column); shadow = sdf_shadow + the effects'

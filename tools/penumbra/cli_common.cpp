@@ -232,7 +232,7 @@ CLI::Option* addAccelOption(CLI::App* cmd, std::string& value) {
         "--accel", value,
         "Acceleration toggles (replace the scene's render.acceleration ones): all | none | a "
         "comma-separated list of culling, cache, id, prepass (exactly those on; all = culling, cache "
-        "and id; prepass is not implemented yet and only warns; docs/FORMATS.md)");
+        "and id; docs/FORMATS.md)");
 }
 
 bool applyAccelOption(const std::string& value, scene::AccelerationSettings& accel, std::string& error) {
