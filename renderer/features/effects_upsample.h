@@ -10,11 +10,15 @@
 // with r the relative depth difference min(|d_i - d|, |d_i - d_plane|) / d, d_plane the depth where
 // the source pixel's camera ray meets p's tangent plane (slanted surfaces keep their neighbours).
 // The bilinear tent makes only the 2x2 around p count; when their weights sum below 1e-3 (p is at
-// a depth or normal edge, none of the four lies on its surface) the value of the most similar of
-// the 3x3 is copied instead: the nearest depth among those facing within 60 degrees of n (any if
-// none). So a value never crosses a depth discontinuity unless no low-resolution pixel of the
-// surface lies within 1.5 low-resolution pixels. Background pixels get shadow 1 and AO 1 with a
-// zero bent normal. The AO texel's bent normal (gba) is averaged and renormalized.
+// a depth or normal edge, none of the four lies on its surface) the result fades linearly (by
+// sum / 1e-3) into the edge value: that of the 3x3 nearest in depth among those facing within 60
+// degrees of n (any if none), a soft minimum (weights exp(-((g_i - min g) / (0.002 d))^2) of the
+// depth gaps g_i = |d_i - d|) so that candidates tied in depth to the trace's last digits share the
+// value rather than one winning by the last bit (box against full-screen tracing,
+// docs/ACCURACY.md). So a value never crosses a depth discontinuity unless no low-resolution pixel
+// of the surface lies within 1.5 low-resolution pixels, and no pixel jumps between the two rules.
+// Background pixels get shadow 1 and AO 1 with a zero bent normal. The AO texel's bent normal (gba)
+// is averaged and renormalized.
 #pragma once
 
 #include "renderer/features/effects.h"

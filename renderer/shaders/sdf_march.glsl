@@ -106,7 +106,12 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 // when the far end moved twice). Converged: a point at most tol above the surface, or a bracket
 // narrower than 1e-5 t (its outer end). The distance growing again without a root is a near miss (a
 // ray that passes within eps of a silhouette is not widened onto it; tPast: a point the object has
-// no root before). Every evaluation counts
+// no root before) — but only where the last step cannot have passed a root: a secant step beyond the
+// previous point's sphere that lands where the distance grew with the two spheres not overlapping
+// is discarded, and the search goes on from the previous point with plain steps only. So a thin
+// sliver of the object (a grazing ray clipping a silhouette, a field's concave cell) is found
+// whatever point the search started from; plain steps crawl along a grazing ray, so such a search
+// may take eight times the refineSteps evaluations. Every evaluation counts
 // against the step limit; a search that the limit cuts short takes its best point when it is within
 // eps / 10 or bracketed.
 float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, float gate, float tEnd, float tol,
@@ -115,13 +120,15 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, flo
     sFirst = s0;
     float ta = t0, sa = s0, tp = t0, sp = s0, tb = t0, sb = 0.0;
     bool bracket = false, prev = false, pending = known;
+    bool plain = false;  // secant steps off: one jumped a possible root (below)
     // A field's interpolated distance bends at its trilinear cells: its secant steps go at most one
     // voxel (or the plain step) at a time, so they do not overshoot the parts a cell resolves.
     float voxel = sdfObjectVoxel(obj);
     int side = 0;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
     // r = -1: the distance at t0 when the caller does not know it (the loop's one evaluation site:
     // a CPU device runs every site of a loop at every iteration, so the search keeps a single one).
-    for (int r = known ? 0 : -1; r < int(trace.counts.w); ++r) {
+    int limit = int(trace.counts.w);
+    for (int r = known ? 0 : -1; r < limit; ++r) {
         if (pending) {
             pending = false;
             sFirst = sa;
@@ -137,7 +144,7 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, flo
             tr = side == -2 ? 0.5 * (ta + tb) : ta - sa * (tb - ta) / (sb - sa);
             if (!(tr > ta && tr < tb)) tr = 0.5 * (ta + tb);
         } else {
-            tr = prev && sa < sp ? ta + sa * (ta - tp) / (sp - sa) : ta + sa;
+            tr = !plain && prev && sa < sp ? ta + sa * (ta - tp) / (sp - sa) : ta + sa;
             if (voxel > 0.0) tr = min(tr, ta + max(sa, voxel));
             tr = min(tr, tEnd);
         }
@@ -160,6 +167,20 @@ float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, flo
             ta = tr;
             sa = sr;
             side = 1;
+        } else if (sr >= sa && tr - ta >= sa + sr && tr > ta + sa) {
+            // A secant step that went past a's sphere and landed where the distance grew, the
+            // spheres of a and tr not overlapping: the distance has a minimum between them that
+            // may lie below zero (a thin sliver of a silhouette or of a field's cell), so the
+            // search does not conclude from it. It goes on from a with plain (safe) steps, which
+            // cannot pass a root: whether the ray hits no longer depends on where the search
+            // started (the full-screen union march and box mode's single-object march start
+            // elsewhere). A step clamped to tEnd with the distance still falling is not redone.
+            // Plain steps crawl where a ray grazes a surface: the search gets eight times its
+            // evaluations from here (the march's step limit still bounds them all; at twice,
+            // culled and unculled marches of the 40-object scene ran out at different points
+            // and split on 2 px).
+            if (!plain) limit = 8 * int(trace.counts.w);
+            plain = true;
         } else if (sr >= sa || tr >= tEnd) {
             // No root before tPast: tr when the spheres of a and tr overlap (a root between them
             // would need tr - ta >= sa + sr, the distance being 1-Lipschitz), else a's sphere, at
@@ -348,6 +369,14 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         prevT = t;
         stepLength = omega * d;
         t += stepLength;
+        if (t > tMax && stepLength > radius) {
+            // An over-relaxed step past the ray's end (the far plane, or a mesh's depth just
+            // behind a surface) is never checked by the spheres' overlap: the plain step instead,
+            // and no more over-relaxation.
+            t = prevT + radius;
+            stepLength = radius;
+            omega = 1.0;
+        }
     }
     if (!hit && steps >= stepLimit && bestObject != 0xffffffffu &&
         bestError <= 4.0 * trace.epsilons.x * footprint && bestT <= tMax) {

@@ -17,7 +17,8 @@
 //     box entry on, none when the ray crosses no box) is the same either way;
 //  3. sphere tracing with over-relaxation (Keinert et al. 2014): steps of omega * d while the
 //     unbounding spheres of consecutive points overlap; when they do not, the step returns to the
-//     previous point plus its plain (safe) step and omega becomes 1 for the rest of the ray;
+//     previous point plus its plain (safe) step and omega becomes 1 for the rest of the ray (so
+//     does an over-relaxed step that ends past the ray's end, which no next point would check);
 //  4. a hit candidate is d < hitEpsilon pixel footprints at the current distance (at least a few
 //     float ulps of the point's coordinates), d the safe distance and, for a field, then also its
 //     raw (interpolated) value — when only the safe one is below, the ray goes on with plain steps
@@ -33,8 +34,9 @@
 //     object, converged within 1e-3 hit epsilons above the surface. The earliest root is the hit,
 //     on its object (the first surface at a contact line, e.g. a box standing on the floor, where
 //     the union's distance is near zero all along the contact plane); when no object has a root
-//     (the distance grows again: the ray passes within hitEpsilon of a silhouette) the march goes
-//     on past the candidate object's closest approach. The decision depends only on the ray and the
+//     (the distance grows again: the ray passes within hitEpsilon of a silhouette; concluded only
+//     from steps that cannot have passed a root: a secant step that does is replaced by plain
+//     steps) the march goes on past the candidate object's closest approach. The decision depends only on the ray and the
 //     objects, not on where the march's samples landed, so culling, the world cache and
 //     over-relaxation leave the picture as it is (tests/renderer/sdf_accel_parity_test.cpp). steps
 //     counts every evaluation and never exceeds the step limit;

@@ -1,17 +1,16 @@
 // Box tracing (issue 14 item 1; renderer/features/sdf_box_trace.h): each traced SDF object's bounds
 // box is rasterized and its fragments trace the object alone. On both backends under validation:
 //   - parity: the lit frame in box mode against full-screen mode by the parity rule (support/
-//     golden.h default ImageRule) on scenes/shapes.json (analytic shapes, CSG, domain repetition,
-//     an unbounded floor), a 200-object instanced objects scene (engine/scene/objects_scene.h;
-//     shadows and AO off), a scene whose camera is inside a torus's box, one where a sphere's box
-//     crosses the near plane (the near-plane draws), and one with rasterized meshes in front of and
-//     behind box-traced objects (the shared hardware depth);
+//     golden.h default ImageRule) on scenes/default.json (baked fields, soft shadows and cone AO),
+//     scenes/shapes.json (analytic shapes, CSG, domain repetition, an unbounded floor), a 200-object
+//     instanced objects scene (engine/scene/objects_scene.h) with shadows and AO off and on, a scene
+//     whose camera is inside a torus's box, one where a sphere's box crosses the near plane (the
+//     near-plane draws), one with rasterized meshes in front of and behind box-traced objects (the
+//     shared hardware depth) and one where a mesh cuts into an object beside its silhouette;
 //   - conservative depth: the fragment shader declares depth_greater (GLSL and SPIR-V), and the
 //     linear depth box mode writes is never nearer than the CPU's ray/box entry of the hit
 //     object's box, on every pixel an object drawn as a box won;
 //   - goldens of box mode per backend, Vulkan-vs-OpenGL parity of box mode, the auto rule.
-// Known gaps, measured and kept as DISABLED_ tests (not loosened): scenes/default.json, the 200-object
-// scene with its shadows and AO, and a mesh cutting into an object beside its silhouette.
 // A failing comparison writes both frames and the diff to <build>/golden_out/box_trace/.
 #include <algorithm>
 #include <cmath>
@@ -250,13 +249,13 @@ protected:
     }
 };
 
-// KNOWN GAP: the default scene does not hold the parity rule's hard limit. Measured at 160x90, both
-// backends alike: 2 px (0.014 %) over 5/255, max 156/255 — one pixel where box mode finds a nearer
-// root on a silhouette (a baked field) that the full-screen union march passes as a near miss, and
-// one where the same hit's depth differs in the root search's last digits and the soft shadow of a
-// baked field flips (shadows and AO off: 1 px, max 83/255). More steps do not change it (512: same).
-// Disabled, not loosened.
-TEST_P(BoxTrace, DISABLED_DefaultScene) {
+// The default scene (baked fields, three shadowed lights, cone AO). Measured at 160x90: max 4/255,
+// 0 px over 5/255 on both backends. It used to miss the hard limit (2 px, max 156/255): a secant
+// step of the hit decision jumped a baked field's silhouette sliver in the full-screen march and not
+// in box mode (sdf_march.glsl objectRoot now discards such a step and goes on with plain steps), and
+// the shadow upsampling's edge value picked between two floor pixels tied in depth by the last bit
+// (effects_upsample.comp now takes a soft minimum).
+TEST_P(BoxTrace, DefaultScene) {
     if (!haveMeshes()) GTEST_SKIP() << "data/meshes is missing: run tools/fetch_meshes.sh";
     parity("default", PENUMBRA_SOURCE_DIR "/scenes/default.json", 1);  // the floor: unbounded
 }
@@ -279,13 +278,14 @@ TEST_P(BoxTrace, Objects200) {
     EXPECT_EQ(box.stats.sdfObjects, 204u);  // 200 objects and the room's four boxes
 }
 
-// KNOWN GAP: the same scene with its sun shadows and cone AO. Both modes hit the same object on
-// every pixel, but the hit depths differ in the root search's last digits (it converges within 1e-3
-// hit epsilons from where the march's samples landed, and a single object's march lands elsewhere
-// than the union's), and the shadows and AO of the baked fields flip on a few pixels. Measured at
-// 160x90: Vulkan 8 px (0.056 %) over 5/255, max 92/255; OpenGL 10 px (0.069 %), max 174/255.
-// Disabled, not loosened.
-TEST_P(BoxTrace, DISABLED_Objects200Effects) {
+// The same scene with its sun shadows and cone AO. Both modes hit the same object on every pixel; the
+// hit depths differ in the root search's last digits (it converges within 1e-3 hit epsilons from
+// where the march's samples landed, and a single object's march lands elsewhere than the union's).
+// Measured at 160x90: max 3/255, 0 px over 5/255 on both backends. It used to fail (Vulkan 8 px, max
+// 92/255; OpenGL 10 px, max 174/255) on edge pixels whose own depth and normal were identical: the
+// upsampling's edge value copied whichever of two candidates tied in depth won by the last bit
+// (effects_upsample.comp now takes a soft minimum over the depth gaps).
+TEST_P(BoxTrace, Objects200Effects) {
     if (!haveMeshes()) GTEST_SKIP() << "data/meshes is missing: run tools/fetch_meshes.sh";
     const std::string path = objects200Path();
     ASSERT_FALSE(path.empty());
@@ -317,14 +317,14 @@ TEST_P(BoxTrace, MeshesAndBoxes) {
     }
 }
 
-// KNOWN GAP: a mesh box cutting into the SDF ball right behind the ball's silhouette. On a vertical
-// run of pixels there the full-screen trace, whose rays end at the mesh depth, shows the mesh where
-// box mode finds the ball's surface up to 0.13 units in front of it (measured at 160x90, both
-// backends: 17 px (0.12 %) over 5/255, max 197/255). The full-screen hit decision's secant step is
-// clamped to the ray's end (the mesh depth) and crosses the thin sliver of the ball in front of the
-// mesh to a point outside it, which reads as a near miss; box mode's rays end at the far plane and
-// the hardware depth test orders ball and mesh. Disabled, not loosened.
-TEST_P(BoxTrace, DISABLED_MeshCutsSilhouette) { parity("mesh_cut", meshScenePath(true)); }
+// A mesh box cutting into the SDF ball right behind the ball's silhouette: the full-screen trace's
+// rays end at the mesh depth, box mode's at the far plane (the hardware depth test orders ball and
+// mesh). Measured at 160x90: max 1/255, 0 px over 5/255 on both backends. It used to fail on a
+// vertical run of pixels (17 px, max 197/255) where the full-screen trace showed the mesh instead of
+// the ball's surface up to 0.13 units in front of it: an over-relaxed step that ended past the ray's
+// end (the mesh depth) was never checked by the spheres' overlap and jumped the ball's sliver
+// (sdf_march.glsl now takes the plain step instead).
+TEST_P(BoxTrace, MeshCutsSilhouette) { parity("mesh_cut", meshScenePath(true)); }
 
 // The written linear depth against the CPU's ray/box entry of the hit object's box (double
 // precision; rays as the renderer casts them, linear depth = t for a ray with unit forward
