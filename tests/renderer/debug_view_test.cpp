@@ -26,6 +26,7 @@
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -153,7 +154,7 @@ Loaded loadText(const std::string& name, const std::string& json) {
     const std::string dir = PENUMBRA_BINARY_DIR "/debug_view_test";
     std::filesystem::create_directories(dir);
     const std::string path = dir + "/" + name + ".json";
-    std::ofstream(path) << json;
+    writeTestFile(path, json);
     return loadPath(path);
 }
 

@@ -39,6 +39,7 @@
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -217,7 +218,7 @@ Rendered renderCase(rhi::Device& device, const EffectCase& c) {
     const std::string dir = PENUMBRA_BINARY_DIR "/effects_golden_test";
     std::filesystem::create_directories(dir);
     const std::string path = dir + "/" + c.name + ".json";
-    std::ofstream(path) << c.scene();
+    writeTestFile(path, c.scene());
     EngineDesc desc;
     desc.loadStaticPlugins = false;
     auto engine = Engine::create(desc, r.error);

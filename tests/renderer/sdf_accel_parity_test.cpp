@@ -27,6 +27,7 @@
 #include "support/accel_toggles.h"
 #include "support/golden.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -89,7 +90,7 @@ std::string objectsScenePath() {
         json += entity;
     }
     json += "\n  ]\n}\n";
-    std::ofstream(path) << json;
+    writeTestFile(path, json);
     return path;
 }
 

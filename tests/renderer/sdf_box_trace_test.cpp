@@ -32,6 +32,7 @@
 #include "support/golden.h"
 #include "support/ref_camera.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -43,7 +44,7 @@ bool haveMeshes() { return std::filesystem::exists(PENUMBRA_SOURCE_DIR "/data/me
 std::string writeScene(const std::string& name, const std::string& json) {
     std::filesystem::create_directories(PENUMBRA_BINARY_DIR "/test_cache");
     const std::string path = PENUMBRA_BINARY_DIR "/test_cache/" + name;
-    std::ofstream(path) << json;
+    writeTestFile(path, json);
     return path;
 }
 

@@ -47,6 +47,7 @@
 #include "support/accel_toggles.h"
 #include "support/golden.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -156,7 +157,7 @@ std::string scenePath(const std::string& name) {
         const std::string dir = PENUMBRA_BINARY_DIR "/sdf_effects_accel_test";
         std::filesystem::create_directories(dir);
         const std::string path = dir + "/" + name + ".json";
-        std::ofstream(path) << (name == "grid" ? gridScene() : meshGridScene());
+        writeTestFile(path, name == "grid" ? gridScene() : meshGridScene());
         return path;
     }
     return std::string(PENUMBRA_SOURCE_DIR "/scenes/") + name + ".json";
