@@ -41,7 +41,8 @@ Group groupOf(const std::string& pass) {
     if (startsWith(pass, "sdf_tile_cull")) return Group::TraceCull;
     if (startsWith(pass, "sdf_world_cache")) return Group::TraceCache;
     if (pass == "sdf_object_scatter") return Group::Scatter;
-    if (startsWith(pass, "sdf_trace_")) return Group::TraceOther;  // e.g. the cache stand-in
+    if (startsWith(pass, "sdf_trace_") || pass == "sdf_cone_prepass")
+        return Group::TraceOther;  // e.g. the cache stand-in, the cone prepass
     if (pass == "sdf_shadow") return Group::Shadow;
     if (pass == "sdf_ao") return Group::Ao;
     return Group::Other;
@@ -271,7 +272,8 @@ CLI::App* addBenchObjectsCommand(CLI::App& group, BenchObjectsOptions& opt) {
     CLI::App* cmd = group.add_subcommand(
         "objects",
         "Object-count sweep (mTec Table 2): median GPU ms of the SDF trace (sdf_trace + the acceleration "
-        "passes sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter, sdf_trace_*), shadows (sdf_shadow + "
+        "passes sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter, sdf_cone_prepass, sdf_trace_*), "
+        "shadows (sdf_shadow + "
         "sdf_tile_cull_effects*, sdf_effects_*) and AO (sdf_ao) on the generated objects scene, per object "
         "count and "
         "acceleration configuration (none, culling, id, world, all), with speed-ups against none; or, "
@@ -508,7 +510,8 @@ std::string detail(const Table& t, const std::vector<Config>& configs) {
     std::string md =
         "| N | config | SDF objects | sdf_trace | culling (sdf_tile_cull*) | world cache (sdf_world_cache*) "
         "| "
-        "sdf_object_scatter | other trace (sdf_trace_*) | trace total | trace / N | sdf_shadow | effects "
+        "sdf_object_scatter | other trace (sdf_trace_*, sdf_cone_prepass) | trace total | trace / N | "
+        "sdf_shadow | effects "
         "culling (sdf_tile_cull_effects*, sdf_effects_*) | sdf_ao | frame GPU | update share |\n"
         "|---:|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|\n";
     for (const auto& [n, row] : t.cells)
@@ -553,7 +556,7 @@ std::string objectsMarkdown(const BenchObjectsOptions& opt, const std::vector<Ta
     for (const Table& t : tables) {
         md += fmt::format(
             "#### {}\n\nTrace GPU ms (medians; sdf_trace + sdf_tile_cull* + sdf_world_cache* + "
-            "sdf_object_scatter + sdf_trace_*):\n\n",
+            "sdf_object_scatter + sdf_cone_prepass + sdf_trace_*):\n\n",
             tableTitle(t));
         md += summary(
             t, configs, [](const Cell& c) { return c.trace(); }, false);
