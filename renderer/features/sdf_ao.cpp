@@ -93,7 +93,7 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             readSdfScene(b, d.sdf);
             d.lists = lists;
-            readSdfEffectsLists(b, d.lists);
+            readSdfTileLists(b, d.lists);
             d.cache = cacheView;
             readSdfWorldCache(b, d.cache);
         },
@@ -106,7 +106,7 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("aoImage", ctx.texture(d.out));
             setSdfScene(params, ctx, d.sdf, atlasSampler);
-            setSdfEffectsLists(params, ctx, d.lists, d.sdf.objects);
+            setSdfTileLists(params, ctx, d.lists, d.sdf.objects);
             setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));

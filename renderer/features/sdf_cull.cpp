@@ -243,12 +243,16 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
 }
 
 void readSdfTileLists(fg::PassBuilder& b, const SdfTileLists& lists) {
+    if (!lists.valid()) return;
     b.read(lists.ranges, rhi::Access::ShaderRead);
     b.read(lists.indices, rhi::Access::ShaderRead);
 }
 
-void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists) {
-    params.set("SdfTileRanges", ctx.buffer(lists.ranges)).set("SdfTileIndices", ctx.buffer(lists.indices));
+void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
+                     fg::BufferRef standIn) {
+    if (!lists.valid() && !standIn.isValid()) return;
+    params.set("SdfTileRanges", ctx.buffer(lists.valid() ? lists.ranges : standIn))
+        .set("SdfTileIndices", ctx.buffer(lists.valid() ? lists.indices : standIn));
 }
 
 }  // namespace penumbra::render

@@ -76,8 +76,11 @@ uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32
 const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc);
 
 // What a consumer pass declares and binds (buffers "SdfTileRanges", "SdfTileIndices" of
-// sdf_tiles.glsl) for one set of lists.
+// sdf_tiles.glsl) for one set of lists. Invalid lists declare nothing and bind `standIn` (when
+// given) to both names: the shader's flags say not to read them, but every declared binding must
+// be set.
 void readSdfTileLists(fg::PassBuilder& b, const SdfTileLists& lists);
-void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists);
+void setSdfTileLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
+                     fg::BufferRef standIn = {});
 
 }  // namespace penumbra::render

@@ -142,16 +142,4 @@ uint32_t sdfEffectsAccelFlags(const scene::AccelerationSettings& accel, const Sd
     return cull | (cacheBound && accel.worldCache ? 4u : 0u) | (cacheBound && accel.idField ? 8u : 0u);
 }
 
-void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists) {
-    if (!lists.valid()) return;
-    b.read(lists.ranges, rhi::Access::ShaderRead);
-    b.read(lists.indices, rhi::Access::ShaderRead);
-}
-
-void setSdfEffectsLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
-                        fg::BufferRef fallback) {
-    params.set("SdfTileRanges", ctx.buffer(lists.valid() ? lists.ranges : fallback))
-        .set("SdfTileIndices", ctx.buffer(lists.valid() ? lists.indices : fallback));
-}
-
 }  // namespace penumbra::render

@@ -51,11 +51,4 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc);
 uint32_t sdfEffectsAccelFlags(const scene::AccelerationSettings& accel, const SdfTileLists& lists,
                               bool cacheBound);
 
-// What sdf_shadow / sdf_ao declare and bind for one set of lists ("SdfTileRanges",
-// "SdfTileIndices" of sdf_tiles.glsl). Invalid lists bind `fallback` to both names (the shader's
-// flags say not to read them; every declared binding must be set).
-void readSdfEffectsLists(fg::PassBuilder& b, const SdfTileLists& lists);
-void setSdfEffectsLists(ShaderParams& params, const fg::PassContext& ctx, const SdfTileLists& lists,
-                        fg::BufferRef fallback);
-
 }  // namespace penumbra::render

@@ -87,7 +87,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.lights, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
             d.lists = lists;
-            readSdfEffectsLists(b, d.lists);
+            readSdfTileLists(b, d.lists);
             d.cache = cacheView;
             readSdfWorldCache(b, d.cache);
         },
@@ -102,7 +102,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("shadowImage", ctx.texture(d.out));
             setSdfScene(params, ctx, d.sdf, atlasSampler);
-            setSdfEffectsLists(params, ctx, d.lists, d.sdf.objects);
+            setSdfTileLists(params, ctx, d.lists, d.sdf.objects);
             setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));

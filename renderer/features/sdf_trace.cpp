@@ -59,10 +59,7 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
             starts = d.starts;
             b.read(d.scene.view, rhi::Access::UniformRead);
             readSdfScene(b, d.sdf);
-            if (d.tiles.valid()) {
-                b.read(d.tiles.ranges, rhi::Access::ShaderRead);
-                b.read(d.tiles.indices, rhi::Access::ShaderRead);
-            }
+            readSdfTileLists(b, d.tiles);
         },
         [&cache = fc.cache, &cs, pipeline, sampler, push, tilesX, tilesY](const Data& d,
                                                                           fg::PassContext& ctx) {
@@ -70,9 +67,7 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view)).set("SdfTileStarts", ctx.buffer(d.starts));
             setSdfScene(params, ctx, d.sdf, sampler);
-            const bool lists = d.tiles.valid();  // without lists a stand-in the shader never reads
-            params.set("SdfTileRanges", ctx.buffer(lists ? d.tiles.ranges : d.sdf.objects))
-                .set("SdfTileIndices", ctx.buffer(lists ? d.tiles.indices : d.sdf.objects));
+            setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);  // without lists: a stand-in
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, tilesX, tilesY);
@@ -135,10 +130,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
-            if (d.tiles.valid()) {
-                b.read(d.tiles.ranges, rhi::Access::ShaderRead);
-                b.read(d.tiles.indices, rhi::Access::ShaderRead);
-            }
+            readSdfTileLists(b, d.tiles);
             readSdfWorldCache(b, d.cache);
         },
         [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux](const Data& d,
@@ -155,11 +147,8 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                     .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
             if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
             setSdfScene(params, ctx, d.sdf, sampler);
-            // Without tile lists the shader never reads them, but every declared buffer needs a
-            // binding: the object buffer stands in (read-only, already declared by this pass).
-            const bool lists = d.tiles.valid();
-            params.set("SdfTileRanges", ctx.buffer(lists ? d.tiles.ranges : d.sdf.objects))
-                .set("SdfTileIndices", ctx.buffer(lists ? d.tiles.indices : d.sdf.objects));
+            // Without tile lists the object buffer stands in (read-only, already declared here).
+            setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);
             setSdfWorldCache(params, ctx, d.cache);
             params.set("SdfTileStarts", ctx.buffer(d.tileStarts.isValid() ? d.tileStarts : d.sdf.objects));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
