@@ -381,11 +381,10 @@ TEST_P(DebugViewGoldens, ShapesMatchGoldens) {
 INSTANTIATE_TEST_SUITE_P(Backends, DebugViewGoldens, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(DebugViewParity, ShapesVulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     for (const GoldenCase& c : kGoldens) {
         ImageRGBA8 vk, gl;
         std::string error;
@@ -402,8 +401,7 @@ TEST(DebugViewParity, ShapesVulkanMatchesOpenGL) {
         }
         EXPECT_TRUE(d.pass) << c.name << ": " << d.summary();
     }
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
 }
 
 }  // namespace

@@ -199,17 +199,15 @@ TEST(DemoSceneBuilder, ReferencesNamesAndReplacement) {
 
 // Backend parity: the same frame on Vulkan and OpenGL agrees under the golden rule.
 TEST(DemoSceneParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     Rendered vk = renderDemo(*vkDevice);
     Rendered gl = renderDemo(*glDevice);
     ASSERT_TRUE(vk.ok) << vk.error;
     ASSERT_TRUE(gl.ok) << gl.error;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     ImageDiff d = compareImages(vk.image, gl.image);
     std::printf("Vulkan vs OpenGL demo scene (%ux%u): %s\n", kWidth, kHeight, d.summary().c_str());
     RecordProperty("max_delta", d.maxDelta);

@@ -326,17 +326,15 @@ class EffectsGoldenParity : public testing::TestWithParam<int> {};
 
 TEST_P(EffectsGoldenParity, VulkanMatchesOpenGL) {
     const EffectCase& c = kCases[GetParam()];
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     const Rendered vk = renderCase(*vkDevice, c);
     const Rendered gl = renderCase(*glDevice, c);
     ASSERT_TRUE(vk.ok) << vk.error;
     ASSERT_TRUE(gl.ok) << gl.error;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     const ImageDiff d = compareImages(vk.image, gl.image);
     std::printf("Vulkan vs OpenGL, %s (%ux%u): %s\n", c.name, kWidth, kHeight, d.summary().c_str());
     RecordProperty("max_delta", d.maxDelta);

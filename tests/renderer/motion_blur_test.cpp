@@ -119,19 +119,17 @@ TEST_P(MotionBlur, MatchesGolden) {
 INSTANTIATE_TEST_SUITE_P(Backends, MotionBlur, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(MotionBlurParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     TaaScene scene;
     std::string error;
     ASSERT_TRUE(scene.load(error)) << error;
     ImageRGBA8 vk, gl;
     ASSERT_TRUE(blurredFrame(*vkDevice, scene, true, vk, error)) << error;
     ASSERT_TRUE(blurredFrame(*glDevice, scene, true, gl, error)) << error;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     const ImageDiff d = compareBackends("motion_blur", vk, gl);
     std::printf("Vulkan vs OpenGL, motion blur: %s\n", d.summary().c_str());
     EXPECT_TRUE(d.pass) << d.summary();

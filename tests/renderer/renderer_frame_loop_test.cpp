@@ -143,11 +143,10 @@ TEST_P(RendererFrameLoop, DebugViewsMatchGoldens) {
 INSTANTIATE_TEST_SUITE_P(Backends, RendererFrameLoop, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(RendererFrameLoopParity, DebugViewsVulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     for (const DebugCase& c : kDebugCases) {
         ImageRGBA8 vk, gl;
         std::string error;
@@ -157,8 +156,7 @@ TEST(RendererFrameLoopParity, DebugViewsVulkanMatchesOpenGL) {
         std::printf("Vulkan vs OpenGL, %s: %s\n", c.name, d.summary().c_str());
         EXPECT_TRUE(d.pass) << c.name << ": " << d.summary();
     }
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
 }
 
 }  // namespace

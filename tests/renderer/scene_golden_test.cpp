@@ -125,17 +125,15 @@ class MeshSceneParity : public testing::TestWithParam<int> {};
 
 TEST_P(MeshSceneParity, VulkanMatchesOpenGL) {
     const SceneCase& sc = kScenes[GetParam()];
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     Rendered vk = renderScene(*vkDevice, sc);
     Rendered gl = renderScene(*glDevice, sc);
     ASSERT_TRUE(vk.ok) << vk.error;
     ASSERT_TRUE(gl.ok) << gl.error;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     ImageDiff d = compareImages(vk.image, gl.image);
     std::printf("Vulkan vs OpenGL, scene %s (%ux%u): %s\n", sc.name, kWidth, kHeight, d.summary().c_str());
     RecordProperty("max_delta", d.maxDelta);

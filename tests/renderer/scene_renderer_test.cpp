@@ -947,18 +947,16 @@ ImageRGBA8 renderParityScene(rhi::Device& device, std::string& error) {
 }
 
 TEST(SceneRendererParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     std::string errVk, errGl;
     ImageRGBA8 vk = renderParityScene(*vkDevice, errVk);
     ImageRGBA8 gl = renderParityScene(*glDevice, errGl);
     ASSERT_FALSE(vk.empty()) << errVk;
     ASSERT_FALSE(gl.empty()) << errGl;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     // Rule (support/golden.h, shared/design.md): per-channel |delta| <= 5/255 for all but 0.1 % of
     // pixels and no pixel over 64/255.
     ImageDiff d = compareImages(vk, gl);

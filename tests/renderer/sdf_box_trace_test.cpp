@@ -409,10 +409,10 @@ TEST(BoxTraceShader, DeclaresDepthGreater) {
 TEST(BoxTraceBackends, VulkanMatchesOpenGL) {
     const std::vector<rhi::Backend> backends = gpuBackends();
     if (backends.size() < 2) GTEST_SKIP() << "needs both backends";
-    auto logVk = std::make_shared<LogCapture>(), logGl = std::make_shared<LogCapture>();
-    auto vk = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto gl = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vk && gl);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vk = pair.vk;
+    auto& gl = pair.gl;
     for (const std::string& path :
          {std::string(PENUMBRA_SOURCE_DIR "/scenes/shapes.json"), nearScenePath()}) {
         BoxScene sc;
@@ -425,8 +425,7 @@ TEST(BoxTraceBackends, VulkanMatchesOpenGL) {
         std::printf("[box] %s: OpenGL vs Vulkan: %s\n", path.c_str(), d.summary().c_str());
         EXPECT_TRUE(d.pass) << path << ": " << d.summary();
     }
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
 }
 
 // Auto (sdf_box_trace.h resolveTraceMode): box up to kAutoBoxMaxObjects objects covering at most

@@ -577,16 +577,14 @@ TEST_P(SdfInstancing, ThousandInstancesGolden) {
 }
 
 TEST(SdfInstancingParity, ThousandInstancesVulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     const Rendered vk = renderThousand(*vkDevice);
     const Rendered gl = renderThousand(*glDevice);
     ASSERT_TRUE(vk.ok && gl.ok);
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     // Metric and threshold: the parity rule (default ImageRule).
     const ImageDiff d = compareImages(vk.image, gl.image);
     std::printf("Vulkan vs OpenGL, 1000 instances (%ux%u): %s\n", kGoldenW, kGoldenH, d.summary().c_str());

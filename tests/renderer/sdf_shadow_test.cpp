@@ -553,11 +553,10 @@ TEST_P(SdfShadow, LitSceneMatchesGolden) {
 INSTANTIATE_TEST_SUITE_P(Backends, SdfShadow, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(SdfShadowParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vk = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto gl = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vk && gl);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vk = pair.vk;
+    auto& gl = pair.gl;
     std::string errorVk, errorGl;
     const ImageRGBA8 a = renderLitScene(*vk, errorVk);
     const ImageRGBA8 b = renderLitScene(*gl, errorGl);
@@ -565,8 +564,7 @@ TEST(SdfShadowParity, VulkanMatchesOpenGL) {
     gl->waitIdle();
     ASSERT_TRUE(errorVk.empty()) << errorVk;
     ASSERT_TRUE(errorGl.empty()) << errorGl;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     const ImageDiff d = compareImages(a, b);
     std::printf("  Vulkan vs OpenGL, sdf_shadow_lit (%ux%u): %s\n", kW, kH, d.summary().c_str());
     if (!d.pass) {

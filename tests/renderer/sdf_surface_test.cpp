@@ -530,16 +530,14 @@ TEST_P(SdfSurface, GoldenTexturedObjects) {
 INSTANTIATE_TEST_SUITE_P(Backends, SdfSurface, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(SdfSurfaceParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vk = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto gl = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vk && gl);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vk = pair.vk;
+    auto& gl = pair.gl;
     const ImageRGBA8 a = renderGoldenScene(*vk), b = renderGoldenScene(*gl);
     vk->waitIdle();
     gl->waitIdle();
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     const ImageDiff d = compareImages(a, b);
     std::printf("Vulkan vs OpenGL, sdf_surface_textured: %s\n", d.summary().c_str());
     if (!d.pass) {

@@ -558,11 +558,10 @@ INSTANTIATE_TEST_SUITE_P(Backends, SdfThicknessReflectionGolden, testing::Values
                          backendName);
 
 TEST(SdfThicknessReflectionParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     ImageRGBA8 vk, gl;
     std::string error;
     ASSERT_TRUE(renderGoldenScene(*vkDevice, vk, error)) << error;
@@ -578,8 +577,7 @@ TEST(SdfThicknessReflectionParity, VulkanMatchesOpenGL) {
         writePng(dir + "/sdf_reflection_thickness_scene.diff.png", d.diffImage);
     }
     EXPECT_TRUE(d.pass) << d.summary();
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
 }
 
 }  // namespace

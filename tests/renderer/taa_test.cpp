@@ -324,11 +324,10 @@ INSTANTIATE_TEST_SUITE_P(Backends, Taa, testing::ValuesIn(gpuBackends()), backen
 
 // Vulkan vs OpenGL after 16 TAA frames, the golden rule (support/golden.h).
 TEST(TaaParity, VulkanMatchesOpenGL) {
-    auto logVk = std::make_shared<LogCapture>();
-    auto logGl = std::make_shared<LogCapture>();
-    auto vkDevice = createTestDevice(rhi::Backend::Vulkan, logVk);
-    auto glDevice = createTestDevice(rhi::Backend::OpenGL, logGl);
-    ASSERT_TRUE(vkDevice && glDevice);
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    auto& vkDevice = pair.vk;
+    auto& glDevice = pair.gl;
     TaaScene scene;
     std::string error;
     ASSERT_TRUE(scene.load(error)) << error;
@@ -336,8 +335,7 @@ TEST(TaaParity, VulkanMatchesOpenGL) {
     const ImageRGBA8 gl = sixteenFrames(*glDevice, scene, error);
     ASSERT_EQ(vk.width, kW) << error;
     ASSERT_EQ(gl.width, kW) << error;
-    EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
-    EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    pair.expectNoErrors();
     const ImageDiff d = compareBackends("taa_16_frames", vk, gl);
     std::printf("Vulkan vs OpenGL, TAA after 16 frames: %s\n", d.summary().c_str());
     EXPECT_TRUE(d.pass) << d.summary();

@@ -34,6 +34,25 @@ struct LogCapture {
 std::unique_ptr<rhi::Device> createTestDevice(rhi::Backend backend, std::shared_ptr<LogCapture> log,
                                               bool validation = true);
 
+// A Vulkan and an OpenGL device, validation on, for the Vulkan-vs-OpenGL parity tests:
+//   BackendPair pair;
+//   ASSERT_TRUE(pair.ready());
+//   ... render on *pair.vk and *pair.gl, compare ...
+//   pair.expectNoErrors();
+struct BackendPair {
+    std::shared_ptr<LogCapture> logVk = std::make_shared<LogCapture>();
+    std::shared_ptr<LogCapture> logGl = std::make_shared<LogCapture>();
+    std::unique_ptr<rhi::Device> vk = createTestDevice(rhi::Backend::Vulkan, logVk);
+    std::unique_ptr<rhi::Device> gl = createTestDevice(rhi::Backend::OpenGL, logGl);
+
+    bool ready() const { return vk && gl; }
+    // Fails the calling test if either device logged a validation error (the first one shown).
+    void expectNoErrors() const {
+        EXPECT_TRUE(logVk->errors.empty()) << logVk->errors.front();
+        EXPECT_TRUE(logGl->errors.empty()) << logGl->errors.front();
+    }
+};
+
 // Fixture parameterised over backend: creates the device in SetUp and, in TearDown, waits for the
 // GPU and fails the test if any validation error was reported.
 class GpuTest : public testing::TestWithParam<rhi::Backend> {
