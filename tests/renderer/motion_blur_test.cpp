@@ -119,20 +119,10 @@ TEST_P(MotionBlur, MatchesGolden) {
 INSTANTIATE_TEST_SUITE_P(Backends, MotionBlur, testing::ValuesIn(gpuBackends()), backendName);
 
 TEST(MotionBlurParity, VulkanMatchesOpenGL) {
-    BackendPair pair;
-    ASSERT_TRUE(pair.ready());
-    auto& vkDevice = pair.vk;
-    auto& glDevice = pair.gl;
-    TaaScene scene;
-    std::string error;
-    ASSERT_TRUE(scene.load(error)) << error;
-    ImageRGBA8 vk, gl;
-    ASSERT_TRUE(blurredFrame(*vkDevice, scene, true, vk, error)) << error;
-    ASSERT_TRUE(blurredFrame(*glDevice, scene, true, gl, error)) << error;
-    pair.expectNoErrors();
-    const ImageDiff d = compareBackends("motion_blur", vk, gl);
-    std::printf("Vulkan vs OpenGL, motion blur: %s\n", d.summary().c_str());
-    EXPECT_TRUE(d.pass) << d.summary();
+    expectTaaSceneParity("motion_blur",
+                         [](rhi::Device& device, TaaScene& scene, ImageRGBA8& image, std::string& error) {
+                             return blurredFrame(device, scene, true, image, error);
+                         });
 }
 
 }  // namespace

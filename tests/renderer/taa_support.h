@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,6 +12,8 @@
 #include "engine/engine.h"
 #include "engine/scene/scene.h"
 #include "renderer/scene_renderer.h"
+#include "support/golden.h"
+#include "support/test_device.h"
 
 namespace penumbra::test {
 
@@ -86,6 +89,24 @@ inline TaaScene::Options withMotionBlur(bool on) {
     TaaScene::Options o;
     o.motionBlur = on;
     return o;
+}
+
+// Vulkan against OpenGL on the TAA scene by the golden rule (support/golden.h): `frame(device,
+// scene, image, error)` renders one backend's image; `name` names the images written on failure.
+template <typename FrameFn>
+void expectTaaSceneParity(const char* name, FrameFn frame) {
+    BackendPair pair;
+    ASSERT_TRUE(pair.ready());
+    TaaScene scene;
+    std::string error;
+    ASSERT_TRUE(scene.load(error)) << error;
+    ImageRGBA8 vk, gl;
+    ASSERT_TRUE(frame(*pair.vk, scene, vk, error)) << error;
+    ASSERT_TRUE(frame(*pair.gl, scene, gl, error)) << error;
+    pair.expectNoErrors();
+    const ImageDiff d = compareBackends(name, vk, gl);
+    std::printf("Vulkan vs OpenGL, %s: %s\n", name, d.summary().c_str());
+    EXPECT_TRUE(d.pass) << d.summary();
 }
 
 inline float srgbToLinear(float c) {

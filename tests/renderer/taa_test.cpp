@@ -324,21 +324,11 @@ INSTANTIATE_TEST_SUITE_P(Backends, Taa, testing::ValuesIn(gpuBackends()), backen
 
 // Vulkan vs OpenGL after 16 TAA frames, the golden rule (support/golden.h).
 TEST(TaaParity, VulkanMatchesOpenGL) {
-    BackendPair pair;
-    ASSERT_TRUE(pair.ready());
-    auto& vkDevice = pair.vk;
-    auto& glDevice = pair.gl;
-    TaaScene scene;
-    std::string error;
-    ASSERT_TRUE(scene.load(error)) << error;
-    const ImageRGBA8 vk = sixteenFrames(*vkDevice, scene, error);
-    const ImageRGBA8 gl = sixteenFrames(*glDevice, scene, error);
-    ASSERT_EQ(vk.width, kW) << error;
-    ASSERT_EQ(gl.width, kW) << error;
-    pair.expectNoErrors();
-    const ImageDiff d = compareBackends("taa_16_frames", vk, gl);
-    std::printf("Vulkan vs OpenGL, TAA after 16 frames: %s\n", d.summary().c_str());
-    EXPECT_TRUE(d.pass) << d.summary();
+    expectTaaSceneParity("taa_16_frames",
+                         [](rhi::Device& device, TaaScene& scene, ImageRGBA8& image, std::string& error) {
+                             image = sixteenFrames(device, scene, error);
+                             return image.width == kW;
+                         });
 }
 
 }  // namespace
