@@ -1000,7 +1000,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
         addLighting(fc);
         const fg::TextureRef color = g.taa ? taa.add(fc, out.color) : out.color;
         out = display;
-        addPostOutput(fc, color, desc.settings.motionBlur);
+        addPostOutput(fc, color, desc.settings.motionBlur, g.taa);
     }
     return transientBytes;
 }

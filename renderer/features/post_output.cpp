@@ -53,7 +53,8 @@ fg::TextureRef addMotionBlurTiles(FrameContext& fc) {
 
 }  // namespace
 
-void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBlurSettings& blur) {
+void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBlurSettings& blur,
+                   bool supersampled) {
     namespace program = shaders::post_output;
     struct Data {
         fg::BufferRef view;
@@ -66,8 +67,12 @@ void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBl
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     const Output& out = *fc.board.find<Output>();
-    const program::PushConstants push{glm::uvec4(out.srgbTarget ? 1u : 0u, blur.samples, kMotionBlurTile, 0u),
-                                      glm::vec4(blur.strength, 0.0f, 0.0f, 0.0f)};
+    rhi::SamplerDesc bilinear;
+    bilinear.debugName = "post_output.bilinear";
+    const rhi::SamplerHandle linear = supersampled ? fc.cache.sampler(bilinear) : prog.nearest;
+    const program::PushConstants push{
+        glm::uvec4(out.srgbTarget ? 1u : 0u, blur.samples, kMotionBlurTile, supersampled ? 1u : 0u),
+        glm::vec4(blur.strength, 0.0f, 0.0f, 0.0f)};
     fc.graph.addPass<Data>(
         "post_output", fg::PassKind::Raster,
         [&](fg::PassBuilder& b, Data& d) {
@@ -81,10 +86,10 @@ void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBl
             }
             d.output = b.write(out.color, rhi::Access::ColorTarget);
         },
-        [&cache = fc.cache, prog, push, motionBlur](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, prog, push, motionBlur, linear](const Data& d, fg::PassContext& ctx) {
             beginFullscreen(ctx, d.output, prog.pipeline, "post_output");
             ShaderParams params(*prog.vertex, *prog.fragment);
-            params.set("View", ctx.buffer(d.view)).set("sceneColor", ctx.texture(d.color), prog.nearest);
+            params.set("View", ctx.buffer(d.view)).set("sceneColor", ctx.texture(d.color), linear);
             if (motionBlur)
                 params.set("gbufferDepth", ctx.texture(d.depth), prog.nearest)
                     .set("gbufferVelocity", ctx.texture(d.velocity), prog.nearest)

@@ -18,6 +18,9 @@ inline constexpr uint32_t kMotionBlurTile = 16;  // pixels per velocity tile sid
 
 // Reads `color` (linear, tone-mapped RGBA16F), with motion blur GBuffer depth and velocity;
 // writes Output.
-void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBlurSettings& blur);
+// `color` is at twice the frame's resolution when `supersampled` (TAA's history: each pixel the
+// average of its 2x2 texels).
+void addPostOutput(FrameContext& fc, fg::TextureRef color, const scene::MotionBlurSettings& blur,
+                   bool supersampled = false);
 
 }  // namespace penumbra::render

@@ -4,7 +4,7 @@
 
 #include "renderer/core/shader_params.h"
 #include "renderer/core/targets.h"
-#include "renderer/features/fullscreen.h"
+#include "renderer/features/fullscreen.h"  // gbufferSampler
 
 namespace penumbra::render {
 namespace {
@@ -33,8 +33,11 @@ bool TaaHistory::begin(fg::FrameGraph& graph, uint32_t width, uint32_t height, b
         m_bytes = 0;
         static const char* const kNames[4] = {"taa.history0", "taa.history1", "taa.raw0", "taa.raw1"};
         for (uint32_t i = 0; i < 4; ++i) {
-            rhi::TextureDesc d = renderTargetDesc(rhi::Format::RGBA16_FLOAT, width, height, kNames[i],
-                                                  TU::ColorTarget | TU::Sampled | TU::CopySrc);
+            // The resolved history at twice the size, the raw samples at 1x.
+            const uint32_t scale = i < 2 ? kTaaHistoryScale : 1;
+            const TU usage = TU::Storage | TU::Sampled;
+            rhi::TextureDesc d =
+                renderTargetDesc(rhi::Format::RGBA16_FLOAT, scale * width, scale * height, kNames[i], usage);
             m_targets[i] = m_device.createTexture(d);
             if (!m_targets[i]) {
                 release(graph);
@@ -76,10 +79,8 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
         fg::BufferRef view;
         fg::TextureRef color, depth, velocity, history, rawHistory, out, rawOut;
     };
-    rhi::GraphicsPipelineDesc pd;
-    pd.colorFormats = {rhi::Format::RGBA16_FLOAT, rhi::Format::RGBA16_FLOAT};
-    const rhi::PipelineHandle pipeline =
-        fc.cache.graphicsPipeline(program::vertex(), program::fragment(), pd);
+    const rhi::ShaderDesc& cs = program::compute();
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
     rhi::SamplerDesc bilinear;
     bilinear.debugName = "taa.bilinear";
@@ -96,7 +97,7 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
         fc.graph.importPersistent("taa.raw", m_targets[2 + m_write], rhi::Access::ShaderSampled);
     fg::TextureRef resolved;
     fc.graph.addPass<Data>(
-        "taa", fg::PassKind::Raster,
+        "taa", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Data& d) {
             const GBuffer& gb = *fc.board.find<GBuffer>();
             d.view = b.read(fc.board.find<SceneBuffers>()->view, rhi::Access::UniformRead);
@@ -105,21 +106,25 @@ fg::TextureRef TaaHistory::add(FrameContext& fc, fg::TextureRef color) {
             d.velocity = b.read(gb.velocity, rhi::Access::ShaderSampled);
             d.history = b.read(history, rhi::Access::ShaderSampled);
             d.rawHistory = b.read(rawHistory, rhi::Access::ShaderSampled);
-            d.out = b.write(target, rhi::Access::ColorTarget);
-            d.rawOut = b.write(rawTarget, rhi::Access::ColorTarget);
+            d.out = b.write(target, rhi::Access::ShaderWrite);
+            d.rawOut = b.write(rawTarget, rhi::Access::ShaderWrite);
             resolved = d.out;
         },
-        [&cache = fc.cache, pipeline, nearest, linear, push](const Data& d, fg::PassContext& ctx) {
-            beginFullscreen(ctx, {d.out, d.rawOut}, pipeline, "taa");
-            ShaderParams params(program::vertex(), program::fragment());
+        [&cache = fc.cache, &cs, pipeline, nearest, linear, push, w = m_width, h = m_height](
+            const Data& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(pipeline);
+            ShaderParams params(cs);
             params.set("View", ctx.buffer(d.view))
                 .set("sceneColor", ctx.texture(d.color), nearest)
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferVelocity", ctx.texture(d.velocity), nearest)
                 .set("history", ctx.texture(d.history), linear)
-                .set("rawHistory", ctx.texture(d.rawHistory), nearest);
+                .set("rawHistory", ctx.texture(d.rawHistory), nearest)
+                .setStorage("historyOut", ctx.texture(d.out))
+                .setStorage("rawOut", ctx.texture(d.rawOut));
+            if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
-            drawFullscreen(ctx, params, cache, pipeline);
+            dispatchOver(ctx.cmd, cs, w, h);
         });
     return resolved;
 }

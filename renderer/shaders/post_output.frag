@@ -16,12 +16,19 @@ layout(set = 2, binding = 3) uniform sampler2D velocityTiles;  // RG: the tile's
 #endif
 
 layout(push_constant) uniform PostOutput {
-    uvec4 params;  // x 1 = write linear (hardware sRGB target), y motion blur taps, z tile size
+    // x 1 = write linear (hardware sRGB target), y motion blur taps, z tile size, w 1 = sceneColor is
+    // at twice the resolution (TAA's history; a bilinear sampler: a pixel is its 2x2 texels' mean)
+    uvec4 params;
     vec4 blur;     // x strength (fraction of the frame's motion)
 } post;
 
 layout(location = 0) in vec2 vUv;
 layout(location = 0) out vec4 outColor;
+
+vec3 sceneAt(ivec2 q) {
+    return post.params.w != 0u ? texture(sceneColor, (vec2(q) + 0.5) * view.viewport.zw).rgb
+                               : texelFetch(sceneColor, q, 0).rgb;
+}
 
 #ifdef MOTION_BLUR
 vec2 motionAt(ivec2 q) { return texelFetch(gbufferVelocity, q, 0).rg + view.jitter.xy - view.jitter.zw; }
@@ -41,7 +48,7 @@ vec3 motionBlur(ivec2 pixel) {
             vec2 v = texelFetch(velocityTiles, clamp(tile + ivec2(dx, dy), ivec2(0), tiles - 1), 0).rg;
             if (dot(v, v) > dot(vmax, vmax)) vmax = v;
         }
-    vec3 centre = texelFetch(sceneColor, pixel, 0).rgb;
+    vec3 centre = sceneAt(pixel);
     vmax *= post.blur.x;
     if (dot(vmax, vmax) < 0.25) return centre;
     float speedP = length(motionAt(pixel)) * post.blur.x, depthP = depthAt(pixel);
@@ -55,7 +62,7 @@ vec3 motionBlur(ivec2 pixel) {
         float dist = length(t * vmax);
         float speedQ = length(motionAt(q)) * post.blur.x, depthQ = depthAt(q);
         float w = depthQ < depthP ? cone(dist, speedQ) : cone(dist, speedP);
-        sum += texelFetch(sceneColor, q, 0).rgb * w;
+        sum += sceneAt(q) * w;
         total += w;
     }
     return sum / total;
@@ -67,7 +74,7 @@ void main() {
 #ifdef MOTION_BLUR
     vec3 c = motionBlur(pixel);
 #else
-    vec3 c = texelFetch(sceneColor, pixel, 0).rgb;
+    vec3 c = sceneAt(pixel);
 #endif
     c = clamp(c, 0.0, 1.0);
     outColor = vec4(post.params.x != 0u ? c : srgbEncode(c), 1.0);

@@ -1,3 +1,0 @@
-// taa, vertex stage: the full-screen triangle.
-#version 450
-#include "fullscreen.glsl"
