@@ -58,6 +58,11 @@ vec3 clipToBox(vec3 lo, vec3 hi, vec3 h) {
     return m > 1.0 ? c + d / m : h;
 }
 
+// The motion (pixels, current - previous) of what pixel's ray sees, given its previous clip position.
+vec2 motionFrom(ivec2 pixel, vec4 prevClip) {
+    return prevClip.w > 1e-6 ? vec2(pixel) + 0.5 - (prevClip.xy / prevClip.w * 0.5 + 0.5) * view.viewport.xy : vec2(0.0);
+}
+
 // Writes the pixel's four texels with `c` (and its depth), and its raw sample.
 void store(ivec2 pixel, vec3 c, float depth, vec3 raw) {
     for (int j = 0; j <= 1; ++j)
@@ -103,7 +108,7 @@ void main() {
         // Only background around: gbuffer.velocity holds 0 there; the background is at infinity,
         // it moves with the camera's rotation only (a direction through the previous camera).
         vec4 prevClip = view.prevViewProj * vec4(ray, 0.0);
-        motion = prevClip.w > 1e-6 ? vec2(pixel) + 0.5 - (prevClip.xy / prevClip.w * 0.5 + 0.5) * view.viewport.xy : vec2(0.0);
+        motion = motionFrom(pixel, prevClip);
     }
     // A surface the history had around this pixel (the four texels of a pixel hold its depth)
     // nearer than any this frame's samples hit: a surface thinner than a pixel that the jitter
@@ -118,7 +123,7 @@ void main() {
     }
     if (hn < nearest * (1.0 - taa.params.z)) {
         vec4 prevClip = view.prevViewProj * vec4(view.position.xyz + hn * ray, 1.0);
-        motion = prevClip.w > 1e-6 ? vec2(pixel) + 0.5 - (prevClip.xy / prevClip.w * 0.5 + 0.5) * view.viewport.xy : vec2(0.0);
+        motion = motionFrom(pixel, prevClip);
     }
     motion += view.jitter.xy - view.jitter.zw;
     vec2 prev = vec2(pixel) + 0.5 - motion;
