@@ -34,7 +34,8 @@ inline constexpr float kTaaCurrentWeight = 0.1f;  // exponential blend weight of
 // kTaaFullMotion; linear in between): on the TAA test's camera path the error ratio went from 0.81
 // (0.1 everywhere) to 0.66 (0.35), and with the raw samples in the clipping box from 0.626 (0.35)
 // to 0.608 (0.5); with the 2x history and the missed thin surfaces' motion 0.470 (0.3; 0.2: 0.483,
-// 0.5: 0.486); a still camera's frames keep 0.1.
+// 0.5: 0.486; tuned on the first, full-screen fragment form of the 2x resolve), 0.449 with the
+// per-pixel compute resolve; a still camera's frames keep 0.1.
 inline constexpr float kTaaMovingWeight = 0.3f;
 inline constexpr float kTaaDepthTolerance = 0.05f;  // relative depth change still the same surface
 
