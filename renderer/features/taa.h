@@ -45,7 +45,8 @@ glm::vec2 taaJitter(uint32_t index);
 
 // The history's resolution, per axis, relative to the frame's: each pixel keeps 2x2 texels, so
 // resampling it at a new sub-pixel offset every frame blurs a quarter as much (the camera-path
-// error ratio went from 0.608 to 0.514 with it, docs/ACCURACY.md "TAA").
+// error ratio went from 0.608 to 0.514 with it, docs/ACCURACY.md "TAA"). taa.comp (its four texels
+// per pixel) and post_output.frag (one bilinear fetch per pixel) are written for 2.
 inline constexpr uint32_t kTaaHistoryScale = 2;
 
 // The history: two pairs of RGBA16F targets (this frame writes one of each pair and reads the
