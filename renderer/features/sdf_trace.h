@@ -21,7 +21,7 @@
 //                   never steps through the baked surface, 0 trusts the interpolated value
 //   refineSteps     the hit decision: at a candidate (raw distance below hitEpsilon) the first
 //                   root along the ray of each object that could be crossed first is searched
-//                   (secant steps, regula falsi on a bracket; sdf_trace.comp objectRoot) with at
+//                   (secant steps, regula falsi on a bracket; sdf_march.glsl RootSearch) with at
 //                   most this many evaluations per object; the earliest root is the hit, none is a
 //                   near miss. 0: every candidate is a hit where it is (no refinement)
 //

@@ -1,7 +1,7 @@
 // The sphere-tracing march of sdf_trace.comp (its header describes the algorithm step by step),
 // shared with the box trace's fragment shader (sdf_box_trace.frag) so both decide hits with the same
-// code: the candidate lists, sceneDistance, the hit decision objectRoot, objectNormal and the march
-// loop sdfMarch.
+// code: the candidate lists, sceneDistance, the hit decision's root search RootSearch, objectNormal
+// and the march loop sdfMarch.
 //
 // Use: declare a push constant block named `trace` whose first members are sdf_trace.comp's
 // (uvec4 counts, vec4 epsilons, vec4 clip, uvec4 accel), include sdf_scene.glsl and, unless
@@ -54,14 +54,14 @@ uint candidateObject(uint i, float tFrom) {
 }
 
 // Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
-// of the other objects' distances. `only` (the id field's object for p's cell, else 0xffffffff) is
-// the nearest object everywhere around p: it alone is evaluated and bounds the others too. With
-// culling, objects whose box the ray had left before `tFrom` (the point the last step started from)
-// are skipped: the step from tFrom to here may have crossed a box the current point is already
-// past, and the over-relaxation check needs every surface near that segment; an object whose box
-// is farther than the best distance so far is not evaluated. Without culling every traced object
-// is evaluated. (Each call site of the distance code is inlined by the compiler, so the shader
-// keeps few of them: this loop, the normal's and the refinement's.)
+// of the other objects' distances. `only` (the id field's object for p's cell, the hit decision's
+// object, else 0xffffffff) is evaluated alone; for the id field it is the nearest object everywhere
+// around p and bounds the others too. With culling, objects whose box the ray had left before
+// `tFrom` (the point the last step started from) are skipped: the step from tFrom to here may have
+// crossed a box the current point is already past, and the over-relaxation check needs every
+// surface near that segment; an object whose box is farther than the best distance so far is not
+// evaluated. Without culling every traced object is evaluated. This is the march's one evaluation
+// site (sdfMarch): the march's steps and the hit decision's searches both call it.
 float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
@@ -82,7 +82,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
         }
         ++g_evaluations;
         float di = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, safety);
-        if (di < d) {
+        if (di < d || one) {
             second = d;
             d = di;
             nearest = obj;
@@ -94,113 +94,181 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
     return d;
 }
 
-// The hit decision for one object: the first root of its raw distance (an interpolated field without
-// the safety bound) along the ray after t0, where it is s0, before tEnd; -1 when there is none
-// (a near miss, or no root before tEnd). Every object is searched on its own, so the result does not
-// depend on where the march's samples landed (culling, the world cache and over-relaxation all move
-// them), and where surfaces touch (a box standing on the floor) the ray's first surface wins: the
-// union's distance is near zero all along a contact plane, its own roots are not. Steps: the secant
-// root estimate through the previous point while the distance falls (exact for a plane at any angle,
-// where plain steps crawl at grazing angles; short of the root where the distance is convex), else a
-// plain step; a point below zero brackets the root and regula falsi closes the bracket (a bisection
-// when the far end moved twice). Converged: a point at most tol above the surface, or a bracket
-// narrower than 1e-5 t (its outer end). The distance growing again without a root is a near miss (a
-// ray that passes within eps of a silhouette is not widened onto it; tPast: a point the object has
-// no root before) — but only where the last step cannot have passed a root: a secant step beyond the
-// previous point's sphere that lands where the distance grew with the two spheres not overlapping
-// is discarded, and the search goes on from the previous point with plain steps only. So a thin
-// sliver of the object (a grazing ray clipping a silhouette, a field's concave cell) is found
-// whatever point the search started from; plain steps crawl along a grazing ray, so such a search
-// may take eight times the refineSteps evaluations. Every evaluation counts
-// against the step limit; a search that the limit cuts short takes its best point when it is within
-// eps / 10 or bracketed.
-float objectRoot(uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, float gate, float tEnd, float tol,
-                 float eps, uint stepLimit, bool countFirst, inout uint steps, out float tPast, out float sFirst) {
-    tPast = t0;
-    sFirst = s0;
-    float ta = t0, sa = s0, tp = t0, sp = s0, tb = t0, sb = 0.0;
-    bool bracket = false, prev = false, pending = known;
-    bool plain = false;  // secant steps off: one jumped a possible root (below)
+// The hit decision for one object (RootSearch, rootStart / rootNext / rootTake): the first root of
+// its raw distance (an interpolated field without the safety bound) along the ray after t0, where it
+// is s0, before tEnd; -1 when there is none (a near miss, or no root before tEnd). Every object is
+// searched on its own, so the result does not depend on where the march's samples landed (culling,
+// the world cache and over-relaxation all move them), and where surfaces touch (a box standing on
+// the floor) the ray's first surface wins: the union's distance is near zero all along a contact
+// plane, its own roots are not. Steps: the secant root estimate through the previous point while
+// the distance falls (exact for a plane at any angle, where plain steps crawl at grazing angles;
+// short of the root where the distance is convex), else a plain step; a point below zero brackets
+// the root and regula falsi closes the bracket (a bisection when the far end moved twice).
+// Converged: a point at most tol above the surface, or a bracket narrower than 1e-5 t (its outer
+// end). The distance growing again without a root is a near miss (a ray that passes within eps of a
+// silhouette is not widened onto it; tPast: a point the object has no root before) — but only where
+// the last step cannot have passed a root: a secant step beyond the previous point's sphere that
+// lands where the distance grew with the two spheres not overlapping is discarded, and the search
+// goes on from the previous point with plain steps only. So a thin sliver of the object (a grazing
+// ray clipping a silhouette, a field's concave cell) is found whatever point the search started
+// from; plain steps crawl along a grazing ray, so such a search may take eight times the
+// refineSteps evaluations. Every evaluation counts against the step limit; a search that the limit
+// cuts short takes its best point when it is within eps / 10 or bracketed.
+//
+// The search is a resumable state machine rather than a loop of its own: rootNext says where to
+// evaluate next (or that the search is over), the march's one evaluation site evaluates there, and
+// rootTake takes the value. A CPU device runs a SIMD group's lanes in lock step and every loop and
+// branch while any lane needs it, so a search nested in the march loop made the whole group wait,
+// at every step where one lane searched, for the longest search of any lane; as states of one loop,
+// the lanes' marches and searches overlap (sdfMarch).
+struct RootSearch {
+    uint obj;
+    float t0, gate, tEnd, tol, eps;
+    bool countFirst;  // the first evaluation counts against the step limit
+    float ta, sa, tp, sp, tb, sb, tr, voxel;
+    bool bracket, prev, pending, plain, done;
+    int side;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
+    int r, limit;
+    float tPast, sFirst, result;
+};
+
+// known: s0 is the object's raw distance at t0 (else the first evaluation is at t0).
+void rootStart(inout RootSearch s, uint obj, float t0, float s0, bool known, float gate, float tEnd,
+               float tol, float eps, bool countFirst) {
+    s.obj = obj;
+    s.t0 = t0;
+    s.gate = gate;
+    s.tEnd = tEnd;
+    s.tol = tol;
+    s.eps = eps;
+    s.countFirst = countFirst;
+    s.tPast = t0;
+    s.sFirst = s0;
+    s.ta = t0;
+    s.sa = s0;
+    s.tp = t0;
+    s.sp = s0;
+    s.tb = t0;
+    s.sb = 0.0;
+    s.tr = t0;
+    s.bracket = false;
+    s.prev = false;
+    s.pending = known;
+    s.plain = false;  // secant steps off: one jumped a possible root (rootTake)
+    s.done = false;
     // A field's interpolated distance bends at its trilinear cells: its secant steps go at most one
     // voxel (or the plain step) at a time, so they do not overshoot the parts a cell resolves.
-    float voxel = sdfObjectVoxel(obj);
-    int side = 0;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
-    // r = -1: the distance at t0 when the caller does not know it (the loop's one evaluation site:
-    // a CPU device runs every site of a loop at every iteration, so the search keeps a single one).
-    int limit = int(trace.counts.w);
-    for (int r = known ? 0 : -1; r < limit; ++r) {
-        if (pending) {
-            pending = false;
-            sFirst = sa;
-            if (sa >= gate) return -1.0;  // no candidate: farther than the gap to the best root
-            if (sa <= tol) return t0;  // on the surface, or inside (a ray that starts in a solid)
+    s.voxel = sdfObjectVoxel(obj);
+    s.side = 0;
+    // r = -1: the distance at t0 when the caller does not know it.
+    s.r = known ? 0 : -1;
+    s.limit = int(trace.counts.w);
+    s.result = -1.0;
+}
+
+void rootFinish(inout RootSearch s, float result) {
+    s.result = result;
+    s.done = true;
+}
+
+// The search's next point (s.tr): true when it is to be evaluated there, false when the search is
+// over (s.result: the root, or -1).
+bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
+    if (s.done) return false;
+    if (s.r < s.limit) {
+        if (s.pending) {
+            s.pending = false;
+            s.sFirst = s.sa;
+            if (s.sa >= s.gate) {  // no candidate: farther than the gap to the best root
+                rootFinish(s, -1.0);
+                return false;
+            }
+            if (s.sa <= s.tol) {  // on the surface, or inside (a ray that starts in a solid)
+                rootFinish(s, s.t0);
+                return false;
+            }
         }
-        if (r >= 0 && steps >= stepLimit) break;
-        if (bracket && tb - ta <= 1e-5 * tb) return ta;
-        float tr;
-        if (r < 0) {
-            tr = t0;
-        } else if (bracket) {
-            tr = side == -2 ? 0.5 * (ta + tb) : ta - sa * (tb - ta) / (sb - sa);
-            if (!(tr > ta && tr < tb)) tr = 0.5 * (ta + tb);
-        } else {
-            tr = !plain && prev && sa < sp ? ta + sa * (ta - tp) / (sp - sa) : ta + sa;
-            if (voxel > 0.0) tr = min(tr, ta + max(sa, voxel));
-            tr = min(tr, tEnd);
-        }
-        float sr = sdfObjectDistance(obj, ro + rd * tr, 0.0);
-        ++g_evaluations;
-        if (r >= 0 || countFirst) ++steps;
-        if (r < 0) {
-            sa = sr;
-            sp = sr;
-            pending = true;
-            continue;
-        }
-        if (sr >= 0.0 && sr <= tol) return tr;
-        if (sr < 0.0) {
-            tb = tr;
-            sb = sr;
-            bracket = true;
-            side = side == -1 ? -2 : -1;
-        } else if (bracket) {
-            ta = tr;
-            sa = sr;
-            side = 1;
-        } else if (sr >= sa && tr - ta >= sa + sr && tr > ta + sa) {
-            // A secant step that went past a's sphere and landed where the distance grew, the
-            // spheres of a and tr not overlapping: the distance has a minimum between them that
-            // may lie below zero (a thin sliver of a silhouette or of a field's cell), so the
-            // search does not conclude from it. It goes on from a with plain (safe) steps, which
-            // cannot pass a root: whether the ray hits no longer depends on where the search
-            // started (the full-screen union march and box mode's single-object march start
-            // elsewhere). A step clamped to tEnd with the distance still falling is not redone.
-            // Plain steps crawl where a ray grazes a surface: the search gets eight times its
-            // evaluations from here (the march's step limit still bounds them all; at twice,
-            // culled and unculled marches of the 40-object scene ran out at different points
-            // and split on 2 px).
-            if (!plain) limit = 8 * int(trace.counts.w);
-            plain = true;
-        } else if (sr >= sa || tr >= tEnd) {
-            // No root before tPast: tr when the spheres of a and tr overlap (a root between them
-            // would need tr - ta >= sa + sr, the distance being 1-Lipschitz), else a's sphere, at
-            // least half an eps on (the march's own least step near a surface).
-            tPast = tr - ta < sa + sr ? tr : ta + max(sa, 0.5 * eps);
-            return -1.0;  // past a minimum above the surface, or no root before tEnd
-        } else {
-            tp = ta;
-            sp = sa;
-            ta = tr;
-            sa = sr;
-            prev = true;
+        if (s.r < 0 || steps < stepLimit) {
+            if (s.bracket && s.tb - s.ta <= 1e-5 * s.tb) {
+                rootFinish(s, s.ta);
+                return false;
+            }
+            float tr;
+            if (s.r < 0) {
+                tr = s.t0;
+            } else if (s.bracket) {
+                tr = s.side == -2 ? 0.5 * (s.ta + s.tb) : s.ta - s.sa * (s.tb - s.ta) / (s.sb - s.sa);
+                if (!(tr > s.ta && tr < s.tb)) tr = 0.5 * (s.ta + s.tb);
+            } else {
+                bool secant = !s.plain && s.prev && s.sa < s.sp;
+                tr = secant ? s.ta + s.sa * (s.ta - s.tp) / (s.sp - s.sa) : s.ta + s.sa;
+                if (s.voxel > 0.0) tr = min(tr, s.ta + max(s.sa, s.voxel));
+                tr = min(tr, s.tEnd);
+            }
+            s.tr = tr;
+            return true;
         }
     }
-    if (pending) {  // refineSteps 0 (the loop ran only the first evaluation, or not at all)
-        sFirst = sa;
-        if (sa >= gate) return -1.0;
-        return t0;  // every candidate is a hit where it is
+    // Out of evaluations (refineSteps, or the step limit).
+    if (s.pending) {  // refineSteps 0 (only the first evaluation ran, or none)
+        s.sFirst = s.sa;
+        rootFinish(s, s.sa >= s.gate ? -1.0 : s.t0);  // every candidate is a hit where it is
+    } else {
+        rootFinish(s, s.bracket || s.sa <= 0.1 * s.eps ? s.ta : -1.0);
     }
-    return bracket || sa <= 0.1 * eps ? ta : -1.0;
+    return false;
+}
+
+// The object's raw distance sr at s.tr.
+void rootTake(inout RootSearch s, float sr, inout uint steps) {
+    if (s.r >= 0 || s.countFirst) ++steps;
+    int r = s.r;
+    s.r += 1;
+    float tr = s.tr;
+    if (r < 0) {
+        s.sa = sr;
+        s.sp = sr;
+        s.pending = true;
+        return;
+    }
+    if (sr >= 0.0 && sr <= s.tol) {
+        rootFinish(s, tr);
+    } else if (sr < 0.0) {
+        s.tb = tr;
+        s.sb = sr;
+        s.bracket = true;
+        s.side = s.side == -1 ? -2 : -1;
+    } else if (s.bracket) {
+        s.ta = tr;
+        s.sa = sr;
+        s.side = 1;
+    } else if (sr >= s.sa && tr - s.ta >= s.sa + sr && tr > s.ta + s.sa) {
+        // A secant step that went past a's sphere and landed where the distance grew, the
+        // spheres of a and tr not overlapping: the distance has a minimum between them that
+        // may lie below zero (a thin sliver of a silhouette or of a field's cell), so the
+        // search does not conclude from it. It goes on from a with plain (safe) steps, which
+        // cannot pass a root: whether the ray hits no longer depends on where the search
+        // started (the full-screen union march and box mode's single-object march start
+        // elsewhere). A step clamped to tEnd with the distance still falling is not redone.
+        // Plain steps crawl where a ray grazes a surface: the search gets eight times its
+        // evaluations from here (the march's step limit still bounds them all; at twice,
+        // culled and unculled marches of the 40-object scene ran out at different points
+        // and split on 2 px).
+        if (!s.plain) s.limit = 8 * int(trace.counts.w);
+        s.plain = true;
+    } else if (sr >= s.sa || tr >= s.tEnd) {
+        // No root before tPast: tr when the spheres of a and tr overlap (a root between them
+        // would need tr - ta >= sa + sr, the distance being 1-Lipschitz), else a's sphere, at
+        // least half an eps on (the march's own least step near a surface).
+        s.tPast = tr - s.ta < s.sa + sr ? tr : s.ta + max(s.sa, 0.5 * s.eps);
+        rootFinish(s, -1.0);  // past a minimum above the surface, or no root before tEnd
+    } else {
+        s.tp = s.ta;
+        s.sp = s.sa;
+        s.ta = tr;
+        s.sa = sr;
+        s.prev = true;
+    }
 }
 
 // The gradient of the object's world distance over a tetrahedron of offsets h (4 evaluations).
@@ -219,6 +287,13 @@ vec3 objectNormal(uint obj, vec3 p, float h) {
 // g_overflow / the tile list, or every traced object without CULL). Returns whether it hit; then t
 // is the hit's ray parameter and hitObject its object. steps counts the steps that evaluated
 // objects (sdf_trace.comp, steps 3-5).
+//
+// One loop with one evaluation site (sceneDistance): each iteration a ray either advances its hit
+// decision to its next evaluation (or to its end: a hit, or a near miss and the march goes on) or,
+// marching, looks up the world cache for its point; then it evaluates what it needs there (the
+// march's candidates, or the decision's one object), and takes the value. The lanes of a SIMD
+// group that decide and the lanes that march share the iterations (Aila and Laine's "if-if" form
+// of a GPU traversal loop), instead of the whole group waiting for every search of every lane.
 bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout float t, out uint hitObject,
               inout uint steps) {
     float safety = trace.epsilons.w;
@@ -230,52 +305,157 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     float prevRadius = 0.0, stepLength = 0.0, prevT = t;
     float bestError = 3.0e38, bestT = t;
     uint bestObject = 0xffffffffu;
-    // World cache steps do not count against the step limit (the object steps then end where
-    // the unaccelerated trace's do); they have their own limit, so the loop stays bounded.
-    uint counted = 1u;
     bool useCache = (trace.accel.x & kCacheBoundFlag) != 0u;
-    for (; steps < stepLimit && t <= tMax; steps += counted) {
-        counted = 1u;
-        vec3 p = ro + rd * t;
-        vec3 pa = abs(p);
-        // At least a few float ulps of the point's coordinates (scenes far from the origin)
-        // and of the distance travelled.
-        float eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
-        // The world cache: far from every surface a plain step of its distance with no
-        // object evaluated; near one, with the id field, only the object it names.
-        float cached = 0.0, cacheVoxel;
-        uint only = 0xffffffffu, cacheObject;
-        bool cacheStep = false;
-#ifndef SDF_MARCH_NO_CACHE
-        if (useCache && sdfCacheLookup(p, cached, cacheVoxel, cacheObject)) {
-            // Beyond two voxels the cached lower bound (the exact distance less at most about
-            // one voxel of margin and cell extent) is at least about half the exact step;
-            // beyond two hit epsilons the point is no hit candidate, so every candidate and
-            // near miss is decided on the objects' distances, as without the cache.
-            cacheStep = (trace.accel.x & kCacheFlag) != 0u && cached > 2.0 * max(cacheVoxel, eps) &&
-                        cacheSteps < stepLimit;
-            if (!cacheStep && (trace.accel.x & kIdFlag) != 0u && cacheObject < trace.counts.x)
-                only = cacheObject;  // NONE, UNCERTAIN and occluder-only objects: the list
+    // The hit decision in progress (deciding): at the march point t, where the safe distance d of
+    // object `nearest` fell below eps (second: the others' lower bound), the first root along the
+    // ray of that object, then of every candidate (index decision) whose distance here is below
+    // the gap to the best root so far (below eps while there is none): the earliest root is the
+    // hit, on its object; none is a near miss and the march goes on.
+    bool deciding = false;
+    int decision = -1, decisionCount = 0;
+    float dD = 0.0, dSecond = 0.0, dEps = 0.0, dRaw = 0.0, dNearPast = 0.0, dBest = 3.0e38, dTol = 0.0;
+    uint dNearest = 0xffffffffu, dRoot = 0xffffffffu;
+    bool dInside = false;
+    RootSearch search;  // set by rootStart when a decision starts
+    for (;;) {
+        bool evaluate = false;
+        uint only = 0xffffffffu;  // the one object to evaluate (the id field's, the search's)
+        float evalSafety = safety;
+        vec3 q = ro + rd * t;
+        float tFrom = min(prevT, t);
+        // (a) The hit decision: its next evaluation, or its end.
+        if (deciding) {
+            for (;;) {
+                if (rootNext(search, steps, stepLimit)) {
+                    evaluate = true;
+                    only = search.obj;
+                    evalSafety = 0.0;
+                    q = ro + rd * search.tr;
+                    break;
+                }
+                // The search of `decision` is over.
+                float tj = search.result;
+                if (decision < 0) {
+                    // The candidate's object (its raw distance: for a field evaluated by the
+                    // search, for a shape the step's own; not below eps: no candidate, below zero:
+                    // inside).
+                    dRaw = search.sFirst;
+                    dNearPast = search.tPast;
+                    dInside = dRaw <= 0.0;
+                    if (dInside || dRaw >= dEps) {
+                        deciding = false;
+                        break;
+                    }
+                }
+                if (tj >= 0.0 && tj < dBest) {
+                    dBest = tj;
+                    dRoot = search.obj;
+                }
+                // The next candidate that could be crossed before the best root so far.
+                bool started = false;
+                for (++decision; decision < decisionCount; ++decision) {
+                    if (trace.counts.w == 0u || steps >= stepLimit) break;
+                    uint obj = candidateObject(uint(decision), t);
+                    if (obj == dNearest || obj == 0xffffffffu) continue;
+                    float gap = dRoot != 0xffffffffu ? dBest - t : dEps;
+                    if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
+                    rootStart(search, obj, t, dD, false, gap, min(dBest, tMax), dTol, dEps, true);
+                    started = true;
+                    break;
+                }
+                if (!started) {
+                    deciding = false;
+                    break;
+                }
+            }
+            if (!deciding) {
+                if (dInside) {
+                    // Inside the solid (a ray that starts inside, e.g. a camera in an object or
+                    // behind the near plane's cut): a hit where it is.
+                    hit = true;
+                    hitObject = dNearest;
+                    break;
+                }
+                if (dRoot != 0xffffffffu) {
+                    hit = true;
+                    hitObject = dRoot;
+                    t = max(dBest, tMin);
+                    break;
+                }
+                // Not on the surface (yet): a plain step on the raw value (never past the other
+                // objects' safe distance), without over-relaxation from here on. A near miss stays
+                // the best candidate for the step-limit rule (a ray stuck in a gap narrower than
+                // the hit epsilon then hits where it entered it instead of showing a hole).
+                float nearErr = dRaw / max(t, 1e-6);
+                if (nearErr < bestError) {
+                    bestError = nearErr;
+                    bestT = t;
+                    bestObject = dNearest;
+                }
+                omega = 1.0;
+                prevRadius = 0.0;
+                stepLength = 0.0;
+                prevT = t;
+                // Past the nearest object's closest approach in one step when the hit decision
+                // found where its distance grows again (no root before there), else its distance;
+                // never past the other objects' safe distance, at least half an eps.
+                t += max(min(max(dRaw, dNearPast - t), dSecond), 0.5 * dEps);
+                q = ro + rd * t;
+                tFrom = min(prevT, t);
+            }
         }
+        // (b) The march: the world cache for its point. Far from every surface a plain step of its
+        // distance with no object evaluated; near one, with the id field, only the object it names.
+        float eps = 0.0, cached = 0.0;
+        bool cacheStep = false;
+        if (!deciding) {
+            if (!(steps < stepLimit && t <= tMax)) break;
+            vec3 pa = abs(q);
+            // At least a few float ulps of the point's coordinates (scenes far from the origin)
+            // and of the distance travelled.
+            eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
+#ifndef SDF_MARCH_NO_CACHE
+            float cacheVoxel;
+            uint cacheObject;
+            if (useCache && sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
+                // Beyond two voxels the cached lower bound (the exact distance less at most about
+                // one voxel of margin and cell extent) is at least about half the exact step;
+                // beyond two hit epsilons the point is no hit candidate, so every candidate and
+                // near miss is decided on the objects' distances, as without the cache. World
+                // cache steps do not count against the step limit (the object steps then end
+                // where the unaccelerated trace's do); they have their own limit.
+                cacheStep = (trace.accel.x & kCacheFlag) != 0u && cached > 2.0 * max(cacheVoxel, eps) &&
+                            cacheSteps < stepLimit;
+                if (!cacheStep && (trace.accel.x & kIdFlag) != 0u && cacheObject < trace.counts.x)
+                    only = cacheObject;  // NONE, UNCERTAIN and occluder-only objects: the list
+            }
 #endif
+            evaluate = !cacheStep;
+        }
+        // (c) The one evaluation site.
         uint nearest = 0xffffffffu;
         float second = cached;
-        float d = cacheStep ? cached : sceneDistance(p, min(prevT, t), safety, only, nearest, second);
+        float d = cached;
+        if (evaluate) d = sceneDistance(q, tFrom, evalSafety, only, nearest, second);
+        // (d) Take the value.
+        if (deciding) {
+            rootTake(search, d, steps);
+            continue;
+        }
         float radius = abs(d);
-        bool sorFail = omega > 1.0 && radius + prevRadius < stepLength;
-        if (sorFail) {
+        if (omega > 1.0 && radius + prevRadius < stepLength) {
             // The spheres do not overlap: the over-relaxed step may have skipped a surface.
             // Back to the previous point, plain step from there, no more over-relaxation.
             t = prevT + prevRadius;
             stepLength = prevRadius;
             omega = 1.0;
             prevT = t;
+            ++steps;
             continue;
         }
         if (cacheStep) {
             // A plain safe step (the cached value bounds every object's distance from below;
             // as the previous radius it keeps the next over-relaxation check conservative).
-            counted = 0u;
             ++cacheSteps;
             prevRadius = d;
             prevT = t;
@@ -285,78 +465,26 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         }
         if (d < eps) {
             // Within eps of a surface by the safe distance. A field's safe distance lies up to
-            // its interpolation bound below the interpolated one, so the raw value decides.
-            // This step counts here (with the hit decision's evaluations after it, each
-            // within the step limit), not at the loop's end.
-            counted = 0u;
+            // its interpolation bound below the interpolated one, so the raw value decides: the
+            // hit decision starts with the candidate's object (whose search knows its raw value
+            // unless a field's safety bound was subtracted). This step counts here, with the
+            // decision's evaluations after it, each within the step limit.
             ++steps;
-            // The hit decision (objectRoot): the first root along the ray of each object that
-            // could be crossed before the best root so far — the candidate's object first (its
-            // raw distance: for a field evaluated by the search, for a shape the step's own;
-            // not below eps: no candidate, below zero: inside), then every candidate whose raw
-            // distance here is below the gap to that root (below eps while there is none). The
-            // earliest root is the hit, on its object; none is a near miss and the march goes
-            // on. One loop with one call, so the shader keeps one search (a CPU device runs
-            // every evaluation site of the march loop at every step).
-            float raw = d, nearPast = t, best = 3.0e38;
-            uint rootObject = 0xffffffffu;
-            bool inside = false;
-            float tol = max(kRootTolerance * eps, 1e-6 * t);
-            int count = int(candidateCount());
-            for (int i = -1; i < count; ++i) {
-                if (i >= 0 && (trace.counts.w == 0u || steps >= stepLimit)) break;
-                uint obj = i < 0 ? nearest : candidateObject(uint(max(i, 0)), t);
-                float gap = rootObject != 0xffffffffu ? best - t : eps;
-                if (i >= 0) {
-                    if (obj == nearest || obj == 0xffffffffu) continue;
-                    if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
-                }
-                bool known = i < 0 && !(safety > 0.0 && sdfObjectVoxel(nearest) > 0.0);
-                float past, first;
-                float tj = objectRoot(obj, ro, rd, t, d, known, gap, i < 0 ? tMax : min(best, tMax), tol, eps,
-                                      stepLimit, i >= 0, steps, past, first);
-                if (i < 0) {
-                    raw = first;
-                    nearPast = past;
-                    inside = raw <= 0.0;
-                    if (inside || raw >= eps) break;
-                }
-                if (tj >= 0.0 && tj < best) {
-                    best = tj;
-                    rootObject = obj;
-                }
-            }
-            if (inside) {
-                // Inside the solid (a ray that starts inside, e.g. a camera in an object or
-                // behind the near plane's cut): a hit where it is.
-                hit = true;
-                hitObject = nearest;
-                break;
-            }
-            if (rootObject != 0xffffffffu) {
-                hit = true;
-                hitObject = rootObject;
-                t = max(best, tMin);
-                break;
-            }
-            // Not on the surface (yet): a plain step on the raw value (never past the other
-            // objects' safe distance), without over-relaxation from here on. A near miss stays
-            // the best candidate for the step-limit rule (a ray stuck in a gap narrower than
-            // the hit epsilon then hits where it entered it instead of showing a hole).
-            float nearErr = raw / max(t, 1e-6);
-            if (nearErr < bestError) {
-                bestError = nearErr;
-                bestT = t;
-                bestObject = nearest;
-            }
-            omega = 1.0;
-            prevRadius = 0.0;
-            stepLength = 0.0;
-            prevT = t;
-            // Past the nearest object's closest approach in one step when the hit decision
-            // found where its distance grows again (no root before there), else its distance;
-            // never past the other objects' safe distance, at least half an eps.
-            t += max(min(max(raw, nearPast - t), second), 0.5 * eps);
+            deciding = true;
+            decision = -1;
+            decisionCount = int(candidateCount());
+            dD = d;
+            dSecond = second;
+            dEps = eps;
+            dNearest = nearest;
+            dRaw = d;
+            dNearPast = t;
+            dBest = 3.0e38;
+            dRoot = 0xffffffffu;
+            dInside = false;
+            dTol = max(kRootTolerance * eps, 1e-6 * t);
+            bool known = !(safety > 0.0 && sdfObjectVoxel(nearest) > 0.0);
+            rootStart(search, nearest, t, d, known, eps, tMax, dTol, eps, false);
             continue;
         }
         float err = d / max(t, 1e-6);
@@ -369,6 +497,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         prevT = t;
         stepLength = omega * d;
         t += stepLength;
+        ++steps;
         if (t > tMax && stepLength > radius) {
             // An over-relaxed step past the ray's end (the far plane, or a mesh's depth just
             // behind a surface) is never checked by the spheres' overlap: the plain step instead,

@@ -1,6 +1,6 @@
 // sdf_trace: full-screen sphere tracing of the frame's SDF objects into the G-buffer
 // (renderer/features/sdf_trace.h documents the settings, renderer/scene_renderer.h the G-buffer).
-// The march and hit decision (steps 2-6's code: candidate lists, sceneDistance, objectRoot,
+// The march and hit decision (steps 2-6's code: candidate lists, sceneDistance, RootSearch,
 // objectNormal, sdfMarch) live in sdf_march.glsl, shared with the box trace (sdf_box_trace.frag).
 // One invocation per pixel:
 //  1. the camera ray through the pixel centre; its interval ends at the rasterized depth when a mesh
@@ -26,7 +26,7 @@
 //     is; if the step limit runs out, the point with the smallest d / t (screen-space error) is kept
 //     when that error is within 4x the hit threshold (Keinert's hit selection), else the pixel is a
 //     miss;
-//  5. the hit decision (objectRoot; refineSteps 0: every candidate is a hit where it is): the first
+//  5. the hit decision (RootSearch; refineSteps 0: every candidate is a hit where it is): the first
 //     root along the ray of the candidate's object on its own raw distance (no interpolation
 //     safety), and of every other candidate object whose distance here is below the gap to the best
 //     root so far (below hitEpsilon while there is none) — secant steps while the distance falls,

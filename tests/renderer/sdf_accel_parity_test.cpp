@@ -254,7 +254,7 @@ protected:
 };
 
 // Analytic scenes: every toggle holds the rule (measured at 160x90, both backends alike: at most
-// 4/255 on any channel, 0 px over 5/255 — the hit decision of sdf_trace.comp, objectRoot, finds each
+// 4/255 on any channel, 0 px over 5/255 — the hit decision of sdf_march.glsl, RootSearch, finds each
 // object's own first root along the ray, so it does not depend on where culling, the cache or
 // over-relaxation put the march's samples).
 // shapes.json with culling and the prepass together: a known gap (the test below).

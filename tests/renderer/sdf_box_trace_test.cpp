@@ -253,7 +253,7 @@ protected:
 // The default scene (baked fields, three shadowed lights, cone AO). Measured at 160x90: max 4/255,
 // 0 px over 5/255 on both backends. It used to miss the hard limit (2 px, max 156/255): a secant
 // step of the hit decision jumped a baked field's silhouette sliver in the full-screen march and not
-// in box mode (sdf_march.glsl objectRoot now discards such a step and goes on with plain steps), and
+// in box mode (sdf_march.glsl RootSearch now discards such a step and goes on with plain steps), and
 // the shadow upsampling's edge value picked between two floor pixels tied in depth by the last bit
 // (effects_upsample.comp now takes a soft minimum).
 TEST_P(BoxTrace, DefaultScene) {
