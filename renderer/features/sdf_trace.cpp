@@ -84,13 +84,28 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
         SdfSceneBuffers sdf;
         GBuffer gb;
         SdfTileLists tiles;        // invalid: the shader loops over every traced object
-        SdfWorldCacheView cache;   // the world cache, or stand-ins the shader never samples
+        SdfWorldCacheView cache;   // the world cache (WORLD_CACHE variants), or none
         fg::BufferRef tileStarts;  // the cone prepass's, or invalid (a stand-in is bound)
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool albedo = gbuffer.albedo.isValid(), aux = gbuffer.aux.isValid();
-    const auto variant = traceVariant<program::Variant>(gbuffer, sdfScene);
+    bool cacheRan = false;
+    const SdfWorldCacheView cacheIn = sdfWorldCacheBinding(fc.board, cacheRan);
+    const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheRan;
+    // The WORLD_CACHE variants hold the cache lookup; a frame without the cache binds none.
+    using V = program::Variant;
+    static constexpr V kCacheVariants[8] = {V::WorldCache,
+                                            V::AlbedoWorldCache,
+                                            V::AuxWorldCache,
+                                            V::AlbedoAuxWorldCache,
+                                            V::SdfFieldsWorldCache,
+                                            V::AlbedoSdfFieldsWorldCache,
+                                            V::AuxSdfFieldsWorldCache,
+                                            V::AlbedoAuxSdfFieldsWorldCache};
+    const V variant =
+        cacheBound ? kCacheVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (sdfScene.atlas.isValid() ? 4 : 0)]
+                   : traceVariant<V>(gbuffer, sdfScene);
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
@@ -98,9 +113,6 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const SdfCullLists* cullLists = fc.board.find<SdfCullLists>();
     const bool tiles = desc.accel.culling && cullLists && cullLists->primary.valid();
     const SdfTileLists tileLists = tiles ? cullLists->primary : SdfTileLists{};
-    bool cacheRan = false;
-    const SdfWorldCacheView cacheIn = sdfWorldCacheBinding(fc.board, cacheRan);
-    const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheRan;
     const uint32_t flags = (desc.accel.culling ? kCullFlag : 0u) | (tiles ? kTileListsFlag : 0u) |
                            (desc.countEvaluations ? kCountEvalsFlag : 0u) |
                            (desc.accel.worldCache ? kCacheFlag : 0u) | (desc.accel.idField ? kIdFlag : 0u) |
@@ -121,7 +133,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             d.sdf = sdfScene;
             d.gb = gbuffer;
             d.tiles = tileLists;
-            d.cache = cacheIn;
+            if (cacheBound) d.cache = cacheIn;
             if (tileStarts.isValid()) d.tileStarts = b.read(tileStarts, rhi::Access::ShaderRead);
             const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
             for (fg::TextureRef t :
@@ -131,10 +143,10 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
             readSdfTileLists(b, d.tiles);
-            readSdfWorldCache(b, d.cache);
+            if (cacheBound) readSdfWorldCache(b, d.cache);
         },
-        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux](const Data& d,
-                                                                                      fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, cacheBound](
+            const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
@@ -149,7 +161,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             setSdfScene(params, ctx, d.sdf, sampler);
             // Without tile lists the object buffer stands in (read-only, already declared here).
             setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);
-            setSdfWorldCache(params, ctx, d.cache);
+            if (cacheBound) setSdfWorldCache(params, ctx, d.cache);
             params.set("SdfTileStarts", ctx.buffer(d.tileStarts.isValid() ? d.tileStarts : d.sdf.objects));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));

@@ -57,7 +57,7 @@
 // not counted), or (flag COUNT_EVALUATIONS, tests and benchmarks) the object distance evaluations
 // of the pixel: the work the acceleration saves.
 #version 450
-#pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS
+#pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS WORLD_CACHE ALBEDO+WORLD_CACHE AUX+WORLD_CACHE ALBEDO+AUX+WORLD_CACHE SDF_FIELDS+WORLD_CACHE ALBEDO+SDF_FIELDS+WORLD_CACHE AUX+SDF_FIELDS+WORLD_CACHE ALBEDO+AUX+SDF_FIELDS+WORLD_CACHE
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"
@@ -75,11 +75,17 @@ layout(local_size_x = 8, local_size_y = 8) in;
 #define SDF_TILE_INDICES_BINDING 11
 #include "sdf_tiles.glsl"
 
+// WORLD_CACHE: the frame has the world cache (worldCache or idField on); without it the march
+// loop has no lookup code (a CPU device runs every branch of a SIMD group: 8-10 % of the trace).
+#ifdef WORLD_CACHE
 #define SDF_CACHE_SET 2
 #define SDF_CACHE_DISTANCE_BINDING 12
 #define SDF_CACHE_IDS_BINDING 13
 #define SDF_CACHE_LEVELS_BINDING 14
 #include "sdf_world_cache.glsl"
+#else
+#define SDF_MARCH_NO_CACHE
+#endif
 
 // Per 8x8 tile: x the ray distance its rays are empty up to (a float's bits), y the evaluations
 // the tile's cone took (sdf_cone_prepass.comp; flag PREPASS; tile index with trace.accel.z per row).
