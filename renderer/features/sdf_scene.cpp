@@ -84,6 +84,22 @@ float smallestSingularValue(const glm::mat3& m) {
     return float(std::sqrt(lambda) * (1.0 - 4e-7));
 }
 
+bool sdfShapePrimitivesOnly(const SdfSceneData& data) {
+    bool any = false;
+    const uint32_t traced = std::min<uint32_t>(data.tracedCount, uint32_t(data.objects.size()));
+    for (uint32_t i = 0; i < traced; ++i) {
+        const glm::uvec4& info = data.objects[i].info;
+        if (info.x != uint32_t(SdfKind::Shapes)) continue;
+        // The header (op 0, i = version, instruction count, stacks), then the instructions.
+        const uint64_t first = info.y;
+        if (first + 1 >= data.records.size() || data.records[first].i[1] != 1) return false;
+        const uint32_t op = data.records[first + 1].op;
+        if (op < uint32_t(sdf::ShapeOp::Sphere) || op > uint32_t(sdf::ShapeOp::Plane)) return false;
+        any = true;
+    }
+    return any;
+}
+
 void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
     SdfSceneBuffers& out = fc.board.add<SdfSceneBuffers>();
     rhi::TextureHandle atlas = data.atlas;
@@ -103,6 +119,7 @@ void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
             }
             d.objectCount = uint32_t(data.objects.size());
             d.tracedCount = std::min(data.tracedCount, d.objectCount);
+            d.shapePrimitives = sdfShapePrimitivesOnly(data);
             out = d;
         },
         [&data](const SdfSceneBuffers& d, fg::PassContext& ctx) {
@@ -261,6 +278,7 @@ void SdfSceneStore::addPasses(FrameContext& fc, const SdfSceneData& data) {
     }
     out.objectCount = uint32_t(data.objects.size());
     out.tracedCount = std::min(data.tracedCount, out.objectCount);
+    out.shapePrimitives = sdfShapePrimitivesOnly(data);
     out.bytes = m_stats.persistentBytes + m_stats.deltaBytes;
     struct Data {
         fg::BufferRef objects, delta, records, fields;

@@ -68,15 +68,23 @@ struct SdfSceneData {
 };
 
 struct SdfSceneBuffers {
-    fg::BufferRef objects;     // GpuSdfObject[]
-    fg::BufferRef records;     // sdf::ShapeInstruction[] (>= 1 record)
-    fg::BufferRef fields;      // GpuSdfField[] (field frames only)
-    fg::TextureRef atlas;      // R16F 3D atlas (field frames only)
-    uint32_t objectCount = 0;  // every object: the effects (shadows, AO, ...) see them all
-    uint32_t tracedCount = 0;  // objects [0, tracedCount) are drawn by the trace; the rest are
-                               // occluders only (mesh occlusion fields, --mesh-sdf occlusion)
-    uint64_t bytes = 0;        // buffer bytes
+    fg::BufferRef objects;         // GpuSdfObject[]
+    fg::BufferRef records;         // sdf::ShapeInstruction[] (>= 1 record)
+    fg::BufferRef fields;          // GpuSdfField[] (field frames only)
+    fg::TextureRef atlas;          // R16F 3D atlas (field frames only)
+    uint32_t objectCount = 0;      // every object: the effects (shadows, AO, ...) see them all
+    uint32_t tracedCount = 0;      // objects [0, tracedCount) are drawn by the trace; the rest are
+                                   // occluders only (mesh occlusion fields, --mesh-sdf occlusion)
+    bool shapePrimitives = false;  // sdfShapePrimitivesOnly(): the trace needs no program interpreter
+    uint64_t bytes = 0;            // buffer bytes
 };
+
+// Whether every traced object of kind Shapes has a program of one shape instruction (a box, a
+// sphere, ...: the shape's own transform is the object's model): the trace's SHAPE_PRIMITIVES
+// variants then evaluate that shape directly instead of running the program interpreter (on a CPU
+// device every branch of the interpreter's loop runs for each instruction). False when a program
+// has more instructions, and for a frame without shape objects (nothing to save).
+bool sdfShapePrimitivesOnly(const SdfSceneData& data);
 
 // The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi
 // rotations and rounded down: the world distance is at least this times the local distance.

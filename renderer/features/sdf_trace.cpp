@@ -1,5 +1,8 @@
 #include "renderer/features/sdf_trace.h"
 
+#include <stdexcept>
+#include <string>
+
 #include <shaders/sdf_cone_prepass.h>
 #include <shaders/sdf_trace.h>
 
@@ -77,6 +80,26 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
 
 }  // namespace
 
+namespace {
+// The sdf_trace variant of these macros: its enumerator is the PascalCase of its macros in the
+// order ALBEDO, AUX, SDF_FIELDS, WORLD_CACHE, SHAPE_PRIMITIVES (sdf_trace.comp lists every
+// combination).
+shaders::sdf_trace::Variant traceProgramVariant(bool albedo, bool aux, bool fields, bool cache,
+                                                bool primitives) {
+    namespace program = shaders::sdf_trace;
+    std::string name;
+    if (albedo) name += "Albedo";
+    if (aux) name += "Aux";
+    if (fields) name += "SdfFields";
+    if (cache) name += "WorldCache";
+    if (primitives) name += "ShapePrimitives";
+    if (name.empty()) return program::Variant::Default;
+    for (uint32_t i = 0; i < program::kVariantCount; ++i)
+        if (name == program::kVariantNames[i]) return program::Variant(i);
+    throw std::logic_error("sdf_trace.comp has no variant " + name);
+}
+}  // namespace
+
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     namespace program = shaders::sdf_trace;
     struct Data {
@@ -93,19 +116,10 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     bool cacheRan = false;
     const SdfWorldCacheView cacheIn = sdfWorldCacheBinding(fc.board, cacheRan);
     const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheRan;
-    // The WORLD_CACHE variants hold the cache lookup; a frame without the cache binds none.
-    using V = program::Variant;
-    static constexpr V kCacheVariants[8] = {V::WorldCache,
-                                            V::AlbedoWorldCache,
-                                            V::AuxWorldCache,
-                                            V::AlbedoAuxWorldCache,
-                                            V::SdfFieldsWorldCache,
-                                            V::AlbedoSdfFieldsWorldCache,
-                                            V::AuxSdfFieldsWorldCache,
-                                            V::AlbedoAuxSdfFieldsWorldCache};
-    const V variant =
-        cacheBound ? kCacheVariants[(albedo ? 1 : 0) | (aux ? 2 : 0) | (sdfScene.atlas.isValid() ? 4 : 0)]
-                   : traceVariant<V>(gbuffer, sdfScene);
+    // The WORLD_CACHE variants hold the cache lookup (a frame without the cache binds none), the
+    // SHAPE_PRIMITIVES ones evaluate one-shape programs without the interpreter.
+    const program::Variant variant =
+        traceProgramVariant(albedo, aux, sdfScene.atlas.isValid(), cacheBound, sdfScene.shapePrimitives);
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);

@@ -53,7 +53,12 @@ float sdfBoxDistance(uint object, vec3 pl) {
 // Signed distance in the object's local units at local position pl.
 float sdfLocalDistance(uint object, vec3 pl, float fieldSafety) {
     uvec4 info = sdfObjects[object].info;
+#ifdef SHAPE_PRIMITIVES
+    // Every shape object of the frame is one shape (SdfSceneBuffers::shapePrimitives).
+    if (info.x == SDF_KIND_SHAPES) return evalShapePrimitive(info.y, pl);
+#else
     if (info.x == SDF_KIND_SHAPES) return evalShapeProgram(info.y, pl);
+#endif
 #ifdef SDF_FIELDS
     return sdfFieldDistance(info.y, pl) - fieldSafety * sdfFieldInterpolationBound(info.y, pl);
 #else

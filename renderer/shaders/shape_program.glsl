@@ -174,6 +174,26 @@ float shapeOtherCopiesBound(vec3 local, ivec3 id, vec3 spacing, uvec3 count, vec
 // each in root units. The measured rounding stays below 5 ulps of that (shape_program_gpu_test).
 #define SHAPE_EVAL_MARGIN(mag) (1.9073486328125e-6 * (mag))
 
+// The margin of a distance d evaluated with magnitude mag (the program's last step).
+float shapeApplyMargin(float d, float mag) {
+#ifdef SHAPE_EVAL_NO_MARGIN
+    return d;  // the raw float evaluation (tests measure its rounding error)
+#else
+    // Conservative: move towards zero by the rounding margin (never across it).
+    float margin = SHAPE_EVAL_MARGIN(mag);
+    return d > 0.0 ? max(d - margin, 0.0) : min(d + margin, 0.0);
+#endif
+}
+
+// evalShapeProgram for a program of one shape instruction (sdfShapePrimitivesOnly on the C++
+// side): the same arithmetic without the interpreter's loop, stacks and frames, so the same value.
+float evalShapePrimitive(uint first, vec3 point) {
+    ShapeInstruction r = shapeRecords[first + 1u];
+    float mag = max(abs(point.x), max(abs(point.y), abs(point.z)));
+    mag = max(mag, max(max(abs(r.a.x), abs(r.a.y)), max(abs(r.a.z), abs(r.a.w))));
+    return shapeApplyMargin(shapeDistance(r.head.x, r.a, point), mag);
+}
+
 float evalShapeProgram(uint first, vec3 point) {
     // The current frame (p, s) and the top distance live in registers; the arrays hold what lies
     // below them (frames 0 .. fp - 1, distances 0 .. sp - 2). Where instructions share work it is
@@ -238,12 +258,5 @@ float evalShapeProgram(uint first, vec3 point) {
             }
         }
     }
-    float d = sp > 0 ? top : SHAPE_FAR;
-#ifdef SHAPE_EVAL_NO_MARGIN
-    return d;  // the raw float evaluation (tests measure its rounding error)
-#else
-    // Conservative: move towards zero by the rounding margin (never across it).
-    float margin = SHAPE_EVAL_MARGIN(mag);
-    return d > 0.0 ? max(d - margin, 0.0) : min(d + margin, 0.0);
-#endif
+    return shapeApplyMargin(sp > 0 ? top : SHAPE_FAR, mag);
 }

@@ -11,6 +11,11 @@
 // dispatch per variant evaluates them all: the default evaluator (conservative margin) and the
 // SHAPE_EVAL_NO_MARGIN variant (raw float).
 //
+// PrimitiveShortcutEqualsTheInterpreter: the trace's shortcut for programs of one shape
+// (evalShapePrimitive, the SHAPE_PRIMITIVES variants of sdf_trace.comp) returns bit for bit what
+// the interpreter returns, for each of the 8 shapes at 2 000 points (inside, near and far), and
+// sdfShapePrimitivesOnly picks exactly the frames it may serve.
+//
 // Criteria, with tol(cpu) = 1e-5 * max(1, |cpu|):
 //  - conservative (the rule): |gpu| <= |cpu| + tol(cpu) at every point. Outside the solid
 //    this is gpu <= cpu + tol, "never exceeds the exact distance by more than 1e-5 relative"
@@ -29,6 +34,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <random>
 #include <string>
 #include <vector>
@@ -41,6 +47,7 @@
 #include "engine/sdf/shape_program.h"
 #include "renderer/core/gpu_cache.h"
 #include "renderer/core/shader_params.h"
+#include "renderer/features/sdf_scene.h"
 #include "support/test_device.h"
 
 namespace {
@@ -374,6 +381,109 @@ TEST_P(ShapeProgramGpu, ConservativeAndAgreesWithTheCpuReference) {
         "%.3g; points %.0f ms, GPU %.0f ms, checks %.0f ms\n",
         d.samples.size(), groups[Box], groups[Near], groups[Far], inside, nearSurface, worstRawM, worstRawRel,
         worstRawExcess, rawViolations, worstGpuM, worstExcess, ms(t0, t1), ms(t1, t2), ms(t2, t3));
+}
+
+// Programs of one shape instruction, one per shape, and points around each (fixed seed).
+const Data& primitiveData() {
+    static const Data d = [] {
+        Data out;
+        const std::vector<Case> shapes = {{"sphere", ShapeNode::sphere(0.8)},
+                                          {"box", ShapeNode::box({0.5, 0.8, 0.3})},
+                                          {"roundedBox", ShapeNode::roundedBox({0.6, 0.4, 0.5}, 0.15)},
+                                          {"capsule", ShapeNode::capsule(0.3, 0.6)},
+                                          {"cylinder", ShapeNode::cylinder(0.4, 0.7)},
+                                          {"torus", ShapeNode::torus(0.7, 0.2)},
+                                          {"cone", ShapeNode::cone(0.6, 0.2, 0.5)},
+                                          {"plane", ShapeNode::plane({1, 2, 3}, 0.3)}};
+        std::mt19937_64 rng(20261202);
+        std::uniform_real_distribution<double> u(-1.5, 1.5);
+        std::uniform_real_distribution<double> far(1.0, 3.0);
+        for (const Case& c : shapes) {
+            Program p;
+            p.name = c.name;
+            if (!sdf::compileShapeProgram(c.root, p.program, out.error)) {
+                out.error = c.name + ": " + out.error;
+                return out;
+            }
+            p.first = uint32_t(out.records.size());
+            out.records.insert(out.records.end(), p.program.records.begin(), p.program.records.end());
+            const uint32_t index = uint32_t(out.programs.size());
+            out.programs.push_back(std::move(p));
+            for (int i = 0; i < 2000; ++i) {
+                Sample s;
+                s.program = index;
+                const glm::dvec3 x(u(rng), u(rng), u(rng));
+                // A quarter of the points out to 1000 units (float rounds at larger magnitudes).
+                s.p = glm::vec3(i % 4 == 3 ? x * std::pow(10.0, far(rng)) : x);
+                s.cpu = sdf::evaluateShapeProgram(out.programs[index].program, glm::dvec3(s.p));
+                out.samples.push_back(s);
+            }
+        }
+        return out;
+    }();
+    return d;
+}
+
+TEST_P(ShapeProgramGpu, PrimitiveShortcutEqualsTheInterpreter) {
+    const Data& d = primitiveData();
+    ASSERT_TRUE(d.error.empty()) << d.error;
+    ASSERT_EQ(d.programs.size(), 8u);
+    for (const Program& p : d.programs) {
+        // Header + one shape: the programs the shortcut serves.
+        ASSERT_EQ(p.program.records.size(), 2u) << p.name;
+        ASSERT_EQ(p.program.records[0].i[1], 1u) << p.name;
+    }
+    const std::vector<float> interpreter = evaluate(d, eval::Variant::Default);
+    const std::vector<float> shortcut = evaluate(d, eval::Variant::ShapePrimitive);
+    ASSERT_EQ(interpreter.size(), d.samples.size());
+    ASSERT_EQ(shortcut.size(), d.samples.size());
+    size_t differ = 0, inside = 0;
+    for (size_t i = 0; i < d.samples.size(); ++i) {
+        inside += interpreter[i] < 0.0f;
+        // Bit for bit: the same arithmetic, so the trace's picture cannot depend on the variant.
+        if (std::memcmp(&interpreter[i], &shortcut[i], sizeof(float)) != 0 && ++differ <= 10)
+            ADD_FAILURE() << d.programs[d.samples[i].program].name << " point " << i << ": interpreter "
+                          << interpreter[i] << ", shortcut " << shortcut[i];
+    }
+    EXPECT_EQ(differ, 0u);
+    EXPECT_GE(inside, d.samples.size() / 20);  // the points reach inside the solids, too
+
+    // sdfShapePrimitivesOnly: one-shape programs only, among the traced objects.
+    using penumbra::render::GpuSdfObject;
+    using penumbra::render::SdfKind;
+    penumbra::render::SdfSceneData scene;
+    scene.records = d.records;
+    auto object = [](SdfKind kind, uint32_t first) {
+        GpuSdfObject o{};
+        o.info = glm::uvec4(uint32_t(kind), first, 0, 0);
+        return o;
+    };
+    for (const Program& p : d.programs) scene.objects.push_back(object(SdfKind::Shapes, p.first));
+    scene.objects.push_back(object(SdfKind::Field, 0));  // fields do not matter
+    scene.tracedCount = uint32_t(scene.objects.size());
+    EXPECT_TRUE(penumbra::render::sdfShapePrimitivesOnly(scene));
+    // A program of more instructions (a placed shape) among them: the interpreter.
+    sdf::ShapeProgram placed;
+    std::string error;
+    ASSERT_TRUE(
+        sdf::compileShapeProgram(ShapeNode::sphere(0.5).placed({1, 0, 0}, {1, 0, 0, 0}, 1.0), placed, error))
+        << error;
+    ASSERT_GT(placed.records[0].i[1], 1u);
+    penumbra::render::SdfSceneData mixed = scene;
+    const uint32_t first = uint32_t(mixed.records.size());
+    mixed.records.insert(mixed.records.end(), placed.records.begin(), placed.records.end());
+    mixed.objects.insert(mixed.objects.begin(), object(SdfKind::Shapes, first));
+    mixed.tracedCount = uint32_t(mixed.objects.size());
+    EXPECT_FALSE(penumbra::render::sdfShapePrimitivesOnly(mixed));
+    // ... unless it is not traced (an occluder-only object is never the trace's).
+    std::rotate(mixed.objects.begin(), mixed.objects.begin() + 1, mixed.objects.end());
+    mixed.tracedCount = uint32_t(mixed.objects.size()) - 1;
+    EXPECT_TRUE(penumbra::render::sdfShapePrimitivesOnly(mixed));
+    // No shape object at all: nothing to save.
+    penumbra::render::SdfSceneData fieldsOnly;
+    fieldsOnly.objects.push_back(object(SdfKind::Field, 0));
+    fieldsOnly.tracedCount = 1;
+    EXPECT_FALSE(penumbra::render::sdfShapePrimitivesOnly(fieldsOnly));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, ShapeProgramGpu, testing::ValuesIn(penumbra::test::gpuBackends()),
