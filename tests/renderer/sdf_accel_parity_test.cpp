@@ -298,6 +298,8 @@ TEST_P(AccelParity, Meshes) {
 // The 150/255 pixel is the same in each: (119, 59), the teapot handle's one-pixel-wide lower arc,
 // hit without acceleration and passed through to the floor with the cache or the prepass. Pixels of
 // the dragon that keep their entity also change by 85-101/255 (shading that follows the depths).
+// Capping the march's field distance at raw / sqrt(3) (a bound of the interpolated surface too)
+// flips that pixel instead of fixing it (docs/ACCURACY.md): the search's start decides it.
 // Disabled, not loosened.
 TEST_P(AccelParity, DISABLED_CacheAndPrepassMeshes) {
     if (!std::filesystem::exists(PENUMBRA_SOURCE_DIR "/data/meshes/bunny.ply"))
