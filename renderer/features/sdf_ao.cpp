@@ -20,14 +20,18 @@ namespace {
 
 namespace program = shaders::sdf_ao;
 
-program::Variant aoVariant(scene::AoVariant v, bool fields) {
+// SHAPE_PRIMITIVES (primitives): one-shape programs without the interpreter (sdfShapePrimitivesOnly).
+program::Variant aoVariant(scene::AoVariant v, bool fields, bool primitives) {
     using V = program::Variant;
     switch (v) {
         case scene::AoVariant::MultiRay:
+            if (primitives) return fields ? V::MultiRaySdfFieldsShapePrimitives : V::MultiRayShapePrimitives;
             return fields ? V::MultiRaySdfFields : V::MultiRay;
         case scene::AoVariant::Cones:
+            if (primitives) return fields ? V::ConesSdfFieldsShapePrimitives : V::ConesShapePrimitives;
             return fields ? V::ConesSdfFields : V::Cones;
         default:
+            if (primitives) return fields ? V::SdfFieldsShapePrimitives : V::ShapePrimitives;
             return fields ? V::SdfFields : V::Default;
     }
 }
@@ -53,7 +57,8 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool fields = sdfScene.atlas.isValid();
-    const rhi::ShaderDesc& cs = program::compute(aoVariant(desc.ao.variant, fields));
+    const rhi::ShaderDesc& cs =
+        program::compute(aoVariant(desc.ao.variant, fields, sdfScene.shapePrimitives));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);

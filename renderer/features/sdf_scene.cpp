@@ -86,9 +86,8 @@ float smallestSingularValue(const glm::mat3& m) {
 
 bool sdfShapePrimitivesOnly(const SdfSceneData& data) {
     bool any = false;
-    const uint32_t traced = std::min<uint32_t>(data.tracedCount, uint32_t(data.objects.size()));
-    for (uint32_t i = 0; i < traced; ++i) {
-        const glm::uvec4& info = data.objects[i].info;
+    for (const GpuSdfObject& object : data.objects) {
+        const glm::uvec4& info = object.info;
         if (info.x != uint32_t(SdfKind::Shapes)) continue;
         // The header (op 0, i = version, instruction count, stacks), then the instructions.
         const uint64_t first = info.y;

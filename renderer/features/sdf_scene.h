@@ -75,15 +75,15 @@ struct SdfSceneBuffers {
     uint32_t objectCount = 0;      // every object: the effects (shadows, AO, ...) see them all
     uint32_t tracedCount = 0;      // objects [0, tracedCount) are drawn by the trace; the rest are
                                    // occluders only (mesh occlusion fields, --mesh-sdf occlusion)
-    bool shapePrimitives = false;  // sdfShapePrimitivesOnly(): the trace needs no program interpreter
+    bool shapePrimitives = false;  // sdfShapePrimitivesOnly(): no program interpreter needed
     uint64_t bytes = 0;            // buffer bytes
 };
 
-// Whether every traced object of kind Shapes has a program of one shape instruction (a box, a
-// sphere, ...: the shape's own transform is the object's model): the trace's SHAPE_PRIMITIVES
-// variants then evaluate that shape directly instead of running the program interpreter (on a CPU
-// device every branch of the interpreter's loop runs for each instruction). False when a program
-// has more instructions, and for a frame without shape objects (nothing to save).
+// Whether every object of kind Shapes has a program of one shape instruction (a box, a sphere,
+// ...: the shape's own transform is the object's model): the SHAPE_PRIMITIVES variants of the
+// trace, the shadows and the AO then evaluate that shape directly instead of running the program
+// interpreter (on a CPU device every branch of the interpreter's loop runs for each instruction).
+// False when a program has more instructions, and for a frame without shape objects.
 bool sdfShapePrimitivesOnly(const SdfSceneData& data);
 
 // The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi

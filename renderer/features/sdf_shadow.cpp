@@ -46,8 +46,11 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool fields = sdfScene.atlas.isValid();
-    const rhi::ShaderDesc& cs =
-        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    // SHAPE_PRIMITIVES: one-shape programs without the interpreter (sdfShapePrimitivesOnly).
+    using V = program::Variant;
+    const rhi::ShaderDesc& cs = program::compute(
+        sdfScene.shapePrimitives ? (fields ? V::SdfFieldsShapePrimitives : V::ShapePrimitives)
+                                 : (fields ? V::SdfFields : V::Default));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);

@@ -16,7 +16,7 @@
 // G-buffer point lies up to the trace's hit epsilon in front of the surface; near a field at least
 // the shadows' surface bias, sdf_cone.glsl).
 #version 450
-#pragma penumbra_variants MULTI_RAY CONES SDF_FIELDS MULTI_RAY+SDF_FIELDS CONES+SDF_FIELDS
+#pragma penumbra_variants MULTI_RAY CONES SDF_FIELDS MULTI_RAY+SDF_FIELDS CONES+SDF_FIELDS SHAPE_PRIMITIVES MULTI_RAY+SHAPE_PRIMITIVES CONES+SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES MULTI_RAY+SDF_FIELDS+SHAPE_PRIMITIVES CONES+SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"

@@ -14,7 +14,7 @@
 // PrimitiveShortcutEqualsTheInterpreter: the trace's shortcut for programs of one shape
 // (evalShapePrimitive, the SHAPE_PRIMITIVES variants of sdf_trace.comp) returns bit for bit what
 // the interpreter returns, for each of the 8 shapes at 2 000 points (inside, near and far), and
-// sdfShapePrimitivesOnly picks exactly the frames it may serve.
+// sdfShapePrimitivesOnly picks exactly the frames it may serve (also used by sdf_shadow, sdf_ao).
 //
 // Criteria, with tol(cpu) = 1e-5 * max(1, |cpu|):
 //  - conservative (the rule): |gpu| <= |cpu| + tol(cpu) at every point. Outside the solid
@@ -448,7 +448,7 @@ TEST_P(ShapeProgramGpu, PrimitiveShortcutEqualsTheInterpreter) {
     EXPECT_EQ(differ, 0u);
     EXPECT_GE(inside, d.samples.size() / 20);  // the points reach inside the solids, too
 
-    // sdfShapePrimitivesOnly: one-shape programs only, among the traced objects.
+    // sdfShapePrimitivesOnly: one-shape programs only, among all objects.
     using penumbra::render::GpuSdfObject;
     using penumbra::render::SdfKind;
     penumbra::render::SdfSceneData scene;
@@ -475,10 +475,10 @@ TEST_P(ShapeProgramGpu, PrimitiveShortcutEqualsTheInterpreter) {
     mixed.objects.insert(mixed.objects.begin(), object(SdfKind::Shapes, first));
     mixed.tracedCount = uint32_t(mixed.objects.size());
     EXPECT_FALSE(penumbra::render::sdfShapePrimitivesOnly(mixed));
-    // ... unless it is not traced (an occluder-only object is never the trace's).
+    // ... also as an untraced object (the shadows and AO see every object).
     std::rotate(mixed.objects.begin(), mixed.objects.begin() + 1, mixed.objects.end());
     mixed.tracedCount = uint32_t(mixed.objects.size()) - 1;
-    EXPECT_TRUE(penumbra::render::sdfShapePrimitivesOnly(mixed));
+    EXPECT_FALSE(penumbra::render::sdfShapePrimitivesOnly(mixed));
     // No shape object at all: nothing to save.
     penumbra::render::SdfSceneData fieldsOnly;
     fieldsOnly.objects.push_back(object(SdfKind::Field, 0));
