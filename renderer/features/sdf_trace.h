@@ -65,15 +65,29 @@ struct SdfTraceDesc {
 // GBuffer as storage images.
 void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc);
 
-// The ALBEDO x AUX x SDF_FIELDS variant of a trace program (sdf_trace, sdf_box_trace: each has
-// its own generated Variant enum with these names) for the frame's G-buffer and field atlas.
+// The ALBEDO x AUX x SDF_FIELDS x SHAPE_PRIMITIVES variant of a trace program (sdf_box_trace;
+// sdf_trace adds WORLD_CACHE: each has its own generated Variant enum with these names) for the
+// frame's G-buffer, field atlas and shape programs (SdfSceneBuffers::shapePrimitives).
 template <class V>
 V traceVariant(const GBuffer& gbuffer, const SdfSceneBuffers& sdf) {
-    static constexpr V kVariants[8] = {
-        V::Default,   V::Albedo,          V::Aux,          V::AlbedoAux,
-        V::SdfFields, V::AlbedoSdfFields, V::AuxSdfFields, V::AlbedoAuxSdfFields};
+    static constexpr V kVariants[16] = {V::Default,
+                                        V::Albedo,
+                                        V::Aux,
+                                        V::AlbedoAux,
+                                        V::SdfFields,
+                                        V::AlbedoSdfFields,
+                                        V::AuxSdfFields,
+                                        V::AlbedoAuxSdfFields,
+                                        V::ShapePrimitives,
+                                        V::AlbedoShapePrimitives,
+                                        V::AuxShapePrimitives,
+                                        V::AlbedoAuxShapePrimitives,
+                                        V::SdfFieldsShapePrimitives,
+                                        V::AlbedoSdfFieldsShapePrimitives,
+                                        V::AuxSdfFieldsShapePrimitives,
+                                        V::AlbedoAuxSdfFieldsShapePrimitives};
     return kVariants[(gbuffer.albedo.isValid() ? 1 : 0) | (gbuffer.aux.isValid() ? 2 : 0) |
-                     (sdf.atlas.isValid() ? 4 : 0)];
+                     (sdf.atlas.isValid() ? 4 : 0) | (sdf.shapePrimitives ? 8 : 0)];
 }
 
 }  // namespace penumbra::render

@@ -11,7 +11,7 @@
 // depth testing can still reject fragments behind nearer geometry. The written depth is at least
 // gl_FragCoord.z (float rounding of a hit on the box face itself must not break the promise).
 #version 450
-#pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS
+#pragma penumbra_variants ALBEDO AUX SDF_FIELDS ALBEDO+AUX ALBEDO+SDF_FIELDS AUX+SDF_FIELDS ALBEDO+AUX+SDF_FIELDS SHAPE_PRIMITIVES ALBEDO+SHAPE_PRIMITIVES AUX+SHAPE_PRIMITIVES ALBEDO+AUX+SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES ALBEDO+SDF_FIELDS+SHAPE_PRIMITIVES AUX+SDF_FIELDS+SHAPE_PRIMITIVES ALBEDO+AUX+SDF_FIELDS+SHAPE_PRIMITIVES
 #include "scene.glsl"
 #include "gbuffer.glsl"
 

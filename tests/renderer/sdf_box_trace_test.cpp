@@ -391,7 +391,7 @@ TEST_P(BoxTrace, DepthNeverNearerThanBox) {
 // layout(depth_greater) and the SPIR-V has OpExecutionMode DepthGreater (14).
 TEST(BoxTraceShader, DeclaresDepthGreater) {
     const std::vector<const rhi::ShaderDesc*> stages = render::sdfBoxTraceFragmentStages();
-    EXPECT_EQ(stages.size(), 8u);  // ALBEDO x AUX x SDF_FIELDS
+    EXPECT_EQ(stages.size(), 16u);  // ALBEDO x AUX x SDF_FIELDS x SHAPE_PRIMITIVES
     for (const rhi::ShaderDesc* stage : stages) {
         const rhi::ShaderDesc& fs = *stage;
         EXPECT_NE(std::string(fs.glsl).find("depth_greater"), std::string::npos) << fs.debugName;
