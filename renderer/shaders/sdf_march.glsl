@@ -282,6 +282,17 @@ vec3 objectNormal(uint obj, vec3 p, float h) {
     return normalize(g);
 }
 
+// The step-limit rule's candidate (sdfMarch): the point with the smallest screen-space error
+// d / t so far, and its object.
+void keepBestCandidate(float err, float t, uint object, inout float bestError, inout float bestT,
+                       inout uint bestObject) {
+    if (err < bestError) {
+        bestError = err;
+        bestT = t;
+        bestObject = object;
+    }
+}
+
 // The march along the ray ro + t rd (rd unit) from t (the first box entry, at least tMin) to tMax
 // with at most stepLimit object steps, over the candidates set up by the caller (g_list / g_count /
 // g_overflow / the tile list, or every traced object without CULL). Returns whether it hit; then t
@@ -386,12 +397,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 // objects' safe distance), without over-relaxation from here on. A near miss stays
                 // the best candidate for the step-limit rule (a ray stuck in a gap narrower than
                 // the hit epsilon then hits where it entered it instead of showing a hole).
-                float nearErr = dRaw / max(t, 1e-6);
-                if (nearErr < bestError) {
-                    bestError = nearErr;
-                    bestT = t;
-                    bestObject = dNearest;
-                }
+                keepBestCandidate(dRaw / max(t, 1e-6), t, dNearest, bestError, bestT, bestObject);
                 omega = 1.0;
                 prevRadius = 0.0;
                 stepLength = 0.0;
@@ -487,12 +493,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             rootStart(search, nearest, t, d, known, eps, tMax, dTol, eps, false);
             continue;
         }
-        float err = d / max(t, 1e-6);
-        if (err < bestError) {
-            bestError = err;
-            bestT = t;
-            bestObject = nearest;
-        }
+        keepBestCandidate(d / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
         prevRadius = radius;
         prevT = t;
         stepLength = omega * d;

@@ -174,23 +174,28 @@ glm::dvec3 gradient(const sdf::ShapeProgram& p, const glm::dvec3& x, double h) {
            (2.0 * h);
 }
 
+// Compiles root and appends it to out (records, programs); false with out.error set on failure.
+bool addProgram(Data& out, const std::string& name, const ShapeNode& root) {
+    Program p;
+    p.name = name;
+    if (!sdf::compileShapeProgram(root, p.program, out.error)) {
+        out.error = name + ": " + out.error;
+        return false;
+    }
+    p.first = uint32_t(out.records.size());
+    p.lo = glm::dvec3(glm::vec3(p.program.records[0].a));
+    p.hi = glm::dvec3(glm::vec3(p.program.records[0].b));
+    out.records.insert(out.records.end(), p.program.records.begin(), p.program.records.end());
+    out.programs.push_back(std::move(p));
+    return true;
+}
+
 // Built once for both backends (deterministic: fixed seed, no dependence on the backend).
 const Data& data() {
     static const Data d = [] {
         Data out;
-        for (Case& c : cases()) {
-            Program p;
-            p.name = c.name;
-            if (!sdf::compileShapeProgram(c.root, p.program, out.error)) {
-                out.error = c.name + ": " + out.error;
-                return out;
-            }
-            p.first = uint32_t(out.records.size());
-            p.lo = glm::dvec3(glm::vec3(p.program.records[0].a));
-            p.hi = glm::dvec3(glm::vec3(p.program.records[0].b));
-            out.records.insert(out.records.end(), p.program.records.begin(), p.program.records.end());
-            out.programs.push_back(std::move(p));
-        }
+        for (const Case& c : cases())
+            if (!addProgram(out, c.name, c.root)) return out;
         std::mt19937_64 rng(20261201);
         std::uniform_real_distribution<double> u(0.0, 1.0);
         std::normal_distribution<double> n(0.0, 1.0);
@@ -399,16 +404,8 @@ const Data& primitiveData() {
         std::uniform_real_distribution<double> u(-1.5, 1.5);
         std::uniform_real_distribution<double> far(1.0, 3.0);
         for (const Case& c : shapes) {
-            Program p;
-            p.name = c.name;
-            if (!sdf::compileShapeProgram(c.root, p.program, out.error)) {
-                out.error = c.name + ": " + out.error;
-                return out;
-            }
-            p.first = uint32_t(out.records.size());
-            out.records.insert(out.records.end(), p.program.records.begin(), p.program.records.end());
             const uint32_t index = uint32_t(out.programs.size());
-            out.programs.push_back(std::move(p));
+            if (!addProgram(out, c.name, c.root)) return out;
             for (int i = 0; i < 2000; ++i) {
                 Sample s;
                 s.program = index;
