@@ -80,11 +80,21 @@ struct SdfSceneBuffers {
 };
 
 // Whether every object of kind Shapes has a program of one shape instruction (a box, a sphere,
-// ...: the shape's own transform is the object's model): the SHAPE_PRIMITIVES variants of the
-// trace, the shadows and the AO then evaluate that shape directly instead of running the program
-// interpreter (on a CPU device every branch of the interpreter's loop runs for each instruction).
+// ...: the shape's own transform is the object's model): the SHAPE_PRIMITIVES variants of every
+// pass that evaluates the objects (trace, effects, cone prepass, world-cache update) then evaluate
+// that shape directly instead of running the program interpreter (on a CPU device every branch of
+// the interpreter's loop runs for each instruction).
 // False when a program has more instructions, and for a frame without shape objects.
 bool sdfShapePrimitivesOnly(const SdfSceneData& data);
+
+// The SDF_FIELDS x SHAPE_PRIMITIVES variant of a pass whose shader has exactly those variants
+// (its generated Variant enum has these names) for the frame's field atlas and shape programs.
+template <class V>
+V sdfSceneVariant(const SdfSceneBuffers& sdf) {
+    static constexpr V kVariants[4] = {V::Default, V::SdfFields, V::ShapePrimitives,
+                                       V::SdfFieldsShapePrimitives};
+    return kVariants[(sdf.atlas.isValid() ? 1 : 0) | (sdf.shapePrimitives ? 2 : 0)];
+}
 
 // The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi
 // rotations and rounded down: the world distance is at least this times the local distance.

@@ -45,12 +45,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
-    const bool fields = sdfScene.atlas.isValid();
-    // SHAPE_PRIMITIVES: one-shape programs without the interpreter (sdfShapePrimitivesOnly).
-    using V = program::Variant;
-    const rhi::ShaderDesc& cs = program::compute(
-        sdfScene.shapePrimitives ? (fields ? V::SdfFieldsShapePrimitives : V::ShapePrimitives)
-                                 : (fields ? V::SdfFields : V::Default));
+    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(sdfScene));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);

@@ -18,9 +18,7 @@ void addSdfThickness(FrameContext& fc, const EffectsDesc& desc) {
         fg::TextureRef thickness;
     };
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
-    const bool fields = sdfScene.atlas.isValid();
-    const rhi::ShaderDesc& cs =
-        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(sdfScene));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle point = gbufferSampler(fc.cache);
     const rhi::SamplerHandle fieldSampler = sdfAtlasSampler(fc.cache, sdfScene);

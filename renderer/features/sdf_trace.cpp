@@ -39,8 +39,7 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
         fg::BufferRef starts;
     };
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
-    const rhi::ShaderDesc& cs =
-        program::compute(sdfScene.atlas.isValid() ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(sdfScene));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
     const scene::TraceSettings& s = desc.settings;

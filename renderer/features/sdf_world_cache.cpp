@@ -57,9 +57,7 @@ rhi::SamplerHandle nearestSampler(GpuCache& cache) {
 // One compute pass over jobs [first, first + count) of the frame's job buffer.
 void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uint32_t first, uint32_t count,
                    uint32_t objectCount) {
-    const bool fields = in.sdf.atlas.isValid();
-    const rhi::ShaderDesc& cs =
-        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
+    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(in.sdf));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, in.sdf);
     fc.graph.addPass<UpdateData>(

@@ -12,7 +12,7 @@
 // are never hit by its rays). Invocations run side by side over tiles (no barrier, no shared
 // memory), which is what CPU rasterizers' SIMD lanes need.
 #version 450
-#pragma penumbra_variants SDF_FIELDS
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"

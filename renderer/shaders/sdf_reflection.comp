@@ -21,7 +21,7 @@
 //  6. rgb = radiance * Fresnel (Schlick, F0 = mix(0.04, baseColor, metallic), at n.v) * fade,
 //     a = fade, where fade = 1 - smoothstep(0, cut-off, roughness) reaches 0 at the cut-off.
 #version 450
-#pragma penumbra_variants SDF_FIELDS
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"

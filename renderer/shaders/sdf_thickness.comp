@@ -13,7 +13,7 @@
 //  4. fields step on their distance plus the interpolation bound (the safety factor applied the
 //     other way round): inside a solid that is the conservative |d|.
 #version 450
-#pragma penumbra_variants SDF_FIELDS
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8) in;
 
 #include "scene.glsl"

@@ -11,7 +11,7 @@
 // the object's bounds box to the distance to that box: both are lower bounds of the distance to
 // the solid, which lies in the box.
 #version 450
-#pragma penumbra_variants SDF_FIELDS
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
 
 #define SDF_SCENE_SET 2

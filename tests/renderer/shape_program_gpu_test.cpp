@@ -14,7 +14,7 @@
 // PrimitiveShortcutEqualsTheInterpreter: the trace's shortcut for programs of one shape
 // (evalShapePrimitive, the SHAPE_PRIMITIVES variants of sdf_trace.comp) returns bit for bit what
 // the interpreter returns, for each of the 8 shapes at 2 000 points (inside, near and far), and
-// sdfShapePrimitivesOnly picks exactly the frames it may serve (also used by sdf_shadow, sdf_ao).
+// sdfShapePrimitivesOnly picks exactly the frames it may serve (every pass that evaluates objects).
 //
 // Criteria, with tol(cpu) = 1e-5 * max(1, |cpu|):
 //  - conservative (the rule): |gpu| <= |cpu| + tol(cpu) at every point. Outside the solid
