@@ -1,5 +1,7 @@
 #include "renderer/features/sdf_trace.h"
 
+#include <algorithm>
+#include <array>
 #include <stdexcept>
 #include <string>
 
@@ -22,7 +24,6 @@ enum : uint32_t {
     kIdFlag = 4,
     kTileListsFlag = 8,
     kCountEvalsFlag = 16,
-    kCacheBoundFlag = 32,
     kPrepassFlag = 64,
 };
 
@@ -82,20 +83,30 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
 namespace {
 // The sdf_trace variant of these macros: its enumerator is the PascalCase of its macros in the
 // order ALBEDO, AUX, SDF_FIELDS, WORLD_CACHE, SHAPE_PRIMITIVES (sdf_trace.comp lists every
-// combination).
+// combination); the table of all 32 is built once, by name.
 shaders::sdf_trace::Variant traceProgramVariant(bool albedo, bool aux, bool fields, bool cache,
                                                 bool primitives) {
     namespace program = shaders::sdf_trace;
-    std::string name;
-    if (albedo) name += "Albedo";
-    if (aux) name += "Aux";
-    if (fields) name += "SdfFields";
-    if (cache) name += "WorldCache";
-    if (primitives) name += "ShapePrimitives";
-    if (name.empty()) return program::Variant::Default;
-    for (uint32_t i = 0; i < program::kVariantCount; ++i)
-        if (name == program::kVariantNames[i]) return program::Variant(i);
-    throw std::logic_error("sdf_trace.comp has no variant " + name);
+    static const std::array<program::Variant, 32> kTable = [] {
+        static constexpr const char* kParts[5] = {"Albedo", "Aux", "SdfFields", "WorldCache",
+                                                  "ShapePrimitives"};
+        std::array<program::Variant, 32> table{};
+        for (uint32_t bits = 0; bits < 32; ++bits) {
+            std::string name;
+            for (uint32_t k = 0; k < 5; ++k)
+                if ((bits >> k) & 1u) name += kParts[k];
+            if (name.empty()) name = "Default";
+            const char* const* names = program::kVariantNames;
+            const char* const* it =
+                std::find_if(names, names + program::kVariantCount, [&](const char* n) { return name == n; });
+            if (it == names + program::kVariantCount)
+                throw std::logic_error("sdf_trace.comp has no variant " + name);
+            table[bits] = program::Variant(uint32_t(it - names));
+        }
+        return table;
+    }();
+    return kTable[(albedo ? 1u : 0u) | (aux ? 2u : 0u) | (fields ? 4u : 0u) | (cache ? 8u : 0u) |
+                  (primitives ? 16u : 0u)];
 }
 }  // namespace
 
@@ -129,7 +140,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const uint32_t flags = (desc.accel.culling ? kCullFlag : 0u) | (tiles ? kTileListsFlag : 0u) |
                            (desc.countEvaluations ? kCountEvalsFlag : 0u) |
                            (desc.accel.worldCache ? kCacheFlag : 0u) | (desc.accel.idField ? kIdFlag : 0u) |
-                           (cacheBound ? kCacheBoundFlag : 0u) | (desc.accel.prepass ? kPrepassFlag : 0u);
+                           (desc.accel.prepass ? kPrepassFlag : 0u);
     const uint32_t tilesX = (fc.width + 7) / 8, tilesY = (fc.height + 7) / 8;
     const fg::BufferRef tileStarts =
         desc.accel.prepass ? addConePrepass(fc, desc, tileLists, tilesX, tilesY) : fg::BufferRef{};

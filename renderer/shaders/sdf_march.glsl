@@ -6,7 +6,8 @@
 // Use: declare a push constant block named `trace` whose first members are sdf_trace.comp's
 // (uvec4 counts, vec4 epsilons, vec4 clip, uvec4 accel), include sdf_scene.glsl and, unless
 // SDF_MARCH_NO_TILES is defined, sdf_tiles.glsl (the tile lists), unless SDF_MARCH_NO_CACHE, also
-// sdf_world_cache.glsl; SDF_MARCH_LIST_SIZE (default 24) sizes the per-pixel candidate list.
+// sdf_world_cache.glsl (with the frame's cache bound: the march looks it up at every step);
+// SDF_MARCH_LIST_SIZE (default 24) sizes the per-pixel candidate list.
 #ifndef PENUMBRA_SDF_MARCH_GLSL
 #define PENUMBRA_SDF_MARCH_GLSL
 
@@ -20,7 +21,6 @@ const uint kCacheFlag = 2u;       // world cache distance steps far from surface
 const uint kIdFlag = 4u;          // id field: near a surface evaluate the one object it names
 const uint kTileListsFlag = 8u;   // SdfTileRanges / SdfTileIndices hold this frame's primary lists
 const uint kCountEvalsFlag = 16u;  // gbuffer.aux y = object evaluations instead of steps
-const uint kCacheBoundFlag = 32u;  // the world cache is bound (else stand-ins that are never read)
 const int kListSize = SDF_MARCH_LIST_SIZE;
 const float kRootTolerance = 1e-3;  // the hit decision's convergence above a surface, in hit epsilons
 
@@ -316,7 +316,6 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     float prevRadius = 0.0, stepLength = 0.0, prevT = t;
     float bestError = 3.0e38, bestT = t;
     uint bestObject = 0xffffffffu;
-    bool useCache = (trace.accel.x & kCacheBoundFlag) != 0u;
     // The hit decision in progress (deciding): at the march point t, where the safe distance d of
     // object `nearest` fell below eps (second: the others' lower bound), the first root along the
     // ray of that object, then of every candidate (index decision) whose distance here is below
@@ -423,7 +422,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
 #ifndef SDF_MARCH_NO_CACHE
             float cacheVoxel;
             uint cacheObject;
-            if (useCache && sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
+            if (sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
                 // Beyond two voxels the cached lower bound (the exact distance less at most about
                 // one voxel of margin and cell extent) is at least about half the exact step;
                 // beyond two hit epsilons the point is no hit candidate, so every candidate and
