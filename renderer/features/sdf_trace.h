@@ -22,13 +22,14 @@
 //   refineSteps     the hit decision: at a candidate (raw distance below hitEpsilon) the first
 //                   root along the ray of each object that could be crossed first is searched
 //                   (secant steps, regula falsi on a bracket; sdf_march.glsl RootSearch) with at
-//                   most this many evaluations per object; the earliest root is the hit, none is a
-//                   near miss. 0: every candidate is a hit where it is (no refinement)
+//                   most this many evaluations per object (a baked field's search walks its cells
+//                   for the exact root of its interpolant, bounded by the step limit only); the
+//                   earliest root is the hit, none is a near miss. 0: every candidate is a hit
+//                   where it is (no refinement)
 //
 // Acceleration (scene::AccelerationSettings; each toggle changes speed only: the hit decision does
 // not depend on where the march's samples land, so the picture stays within the parity rule of the
-// unaccelerated trace (with baked fields and the world cache a few pixels still differ):
-// tests/renderer/sdf_accel_parity_test.cpp):
+// unaccelerated trace: tests/renderer/sdf_accel_parity_test.cpp):
 //   culling         the pixel's tile list (SdfCullLists::primary on the blackboard, every traced
 //                   object without it) narrowed to the boxes the ray crosses; off: every traced
 //                   object at every step (mTec's "no optimization"; the march interval, from the

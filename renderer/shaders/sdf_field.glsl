@@ -101,8 +101,7 @@ float sdfFieldSample(SdfField f, vec3 x) {
     return textureLod(sdfAtlas, uvw, 0.0).r * f.origin.w;
 }
 
-float sdfFieldDistance(uint slot, vec3 p) {
-    SdfField f = sdfFields[slot];
+float sdfFieldDistanceOf(SdfField f, vec3 p) {
     float voxel = f.origin.w;
     vec3 x = sdfFieldVoxelCoord(f, p);
     vec3 qx = clamp(x, vec3(0.0), f.dims.xyz - 1.0);
@@ -123,8 +122,16 @@ float sdfFieldDistance(uint slot, vec3 p) {
     return 0.0;
 }
 
-float sdfFieldInterpolationBound(uint slot, vec3 p) {
-    SdfField f = sdfFields[slot];
+// The hardware term of the interpolation bound, in voxels: 3 * (2^-8 + size * 2^-22) for the filter's
+// weights and coordinate rounding, plus the shrink.
+float sdfFieldHardwareTerm(SdfField f) {
+    float atlasSize = 1.0 / min(min(f.uvwScale.x, f.uvwScale.y), f.uvwScale.z);
+    return 3.0 * (0.00390625 + atlasSize * 2.384185791015625e-7) + 3.0 * SDF_FIELD_SHRINK;
+}
+
+float sdfFieldDistance(uint slot, vec3 p) { return sdfFieldDistanceOf(sdfFields[slot], p); }
+
+float sdfFieldInterpolationBoundOf(SdfField f, vec3 p) {
     vec3 hi = f.dims.xyz - 1.0;
     vec3 x = clamp(sdfFieldVoxelCoord(f, p), vec3(0.0), hi);
     vec3 t = x - min(floor(x), max(hi - 1.0, vec3(0.0)));  // in [0, 1]; 0 on a one-voxel axis
@@ -134,8 +141,31 @@ float sdfFieldInterpolationBound(uint slot, vec3 p) {
         vec3 w = mix(1.0 - t, t, c);
         sum += w.x * w.y * w.z * length(c - t);
     }
-    float atlasSize = 1.0 / min(min(f.uvwScale.x, f.uvwScale.y), f.uvwScale.z);
-    // 3 * (2^-8 + size * 2^-22) for the filter's weights and coordinate rounding, plus the shrink.
-    float hardware = 3.0 * (0.00390625 + atlasSize * 2.384185791015625e-7) + 3.0 * SDF_FIELD_SHRINK;
-    return (sum + hardware) * f.origin.w;
+    return (sum + sdfFieldHardwareTerm(f)) * f.origin.w;
+}
+
+float sdfFieldInterpolationBound(uint slot, vec3 p) { return sdfFieldInterpolationBoundOf(sdfFields[slot], p); }
+
+// A lower bound of the distance from p to the zero set, within B, of the trilinear interpolant of the
+// field's stored values (the surface the hit decision's cell walk finds, sdf_march.glsl); raw is the
+// field's distance at p (sdfFieldDistance) and bound its interpolation bound there. Inside B the
+// larger of two bounds:
+//   - Lipschitz: along an edge two stored values differ by at most one voxel (samples of a
+//     1-Lipschitz distance, rounded toward -infinity as halfs: at most 2^-8 voxel more where the
+//     values are under 8 voxels, which is where this bound is the larger one), so each partial
+//     derivative of the interpolant is at most 1.004 and its gradient at most sqrt(3) * 1.004 <
+//     1.75; the filtered value exceeds the interpolant by at most the hardware term hw:
+//     (raw - hw) / 1.75.
+//   - Through the true distance f: at a zero q of the interpolant f(q) is at most its interpolation
+//     bound there, at most sqrt(3) / 2 voxel plus hw (the margin), and f(p) >= raw - bound; so the
+//     distance is at least raw - bound - margin (the larger one beyond about 4 voxels).
+// Outside B the larger of the second bound and the distance to B.
+float sdfFieldRootDistance(SdfField f, vec3 p, float raw, float bound) {
+    float hw = sdfFieldHardwareTerm(f) * f.origin.w;
+    float margin = 0.8660254 * f.origin.w + hw;
+    float through = raw - bound - margin;
+    vec3 x = sdfFieldVoxelCoord(f, p);
+    vec3 off = x - clamp(x, vec3(0.0), f.dims.xyz - 1.0);
+    if (off != vec3(0.0)) return max(sdfSafeLength(off) * f.origin.w, through);
+    return max((raw - hw) * (1.0 / 1.75), through);
 }

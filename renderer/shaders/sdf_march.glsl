@@ -32,6 +32,7 @@ bool g_overflow;
 uint g_tileFirst, g_tileCount;
 bool g_tileAll;
 uint g_evaluations;  // object distance evaluations of this pixel (kCountEvalsFlag)
+float g_nearestUncapped;  // sceneDistance's nearest object's distance without sdfFieldRootDistance
 
 #ifdef SDF_MARCH_NO_TILES
 uint tileObject(uint i) { return i; }
@@ -53,6 +54,28 @@ uint candidateObject(uint i, float tFrom) {
     return tFrom > g_interval[i].y ? 0xffffffffu : g_list[i];
 }
 
+// An object's local distance for the march (sdfLocalDistance; the hit decision evaluates with
+// fieldSafety 0 and rootBound false: a field's raw value). With rootBound (a march step, while the
+// hit decision searches: trace.counts.w > 0) a field's value is also at most sdfFieldRootDistance,
+// so that no step passes a part of the surface that the decision's cell walk would find (where the
+// trilinear interpolant bulges out of the baked surface by up to its interpolation bound): whether
+// a ray hits a field then does not depend on where its steps landed.
+float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out float uncapped) {
+    uvec4 info = sdfObjects[obj].info;
+#ifdef SDF_FIELDS
+    if (info.x == SDF_KIND_FIELD) {
+        SdfField f = sdfFields[info.y];
+        float raw = sdfFieldDistanceOf(f, pl);
+        bool bounds = rootBound && trace.counts.w > 0u;
+        float bound = safety > 0.0 || bounds ? sdfFieldInterpolationBoundOf(f, pl) : 0.0;
+        uncapped = raw - safety * bound;
+        return bounds ? min(uncapped, sdfFieldRootDistance(f, pl, raw, bound)) : uncapped;
+    }
+#endif
+    uncapped = sdfShapeDistance(info, pl);
+    return uncapped;
+}
+
 // Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
 // of the other objects' distances. `only` (the id field's object for p's cell, the hit decision's
 // object, else 0xffffffff) is evaluated alone; for the id field it is the nearest object everywhere
@@ -62,7 +85,8 @@ uint candidateObject(uint i, float tFrom) {
 // surface near that segment; an object whose box is farther than the best distance so far is not
 // evaluated. Without culling every traced object is evaluated. This is the march's one evaluation
 // site (sdfMarch): the march's steps and the hit decision's searches both call it.
-float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
+float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound, out uint nearest,
+                    out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
@@ -81,11 +105,13 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
             }
         }
         ++g_evaluations;
-        float di = sdfObjects[obj].boundsMin.w * sdfLocalDistance(obj, pl, safety);
+        float ui;
+        float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, rootBound, ui);
         if (di < d || one) {
             second = d;
             d = di;
             nearest = obj;
+            g_nearestUncapped = sdfObjects[obj].boundsMin.w * ui;
         } else {
             second = min(second, di);
         }
@@ -115,6 +141,18 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 // refineSteps evaluations. Every evaluation counts against the step limit; a search that the limit
 // cuts short takes its best point when it is within eps / 10 or bracketed.
 //
+// A baked field's search walks its cells instead (cellStep): from t0 (or where the ray enters the
+// field's box of voxel centres B) through each trilinear cell the ray crosses, the first root of the
+// interpolant of the cell's eight stored values along the ray (a cubic: cellFirstRoot), exactly,
+// without the filter and without steps that could pass a thin part; a cell whose values are all
+// above zero has none. The walk is bounded by the march's step limit only (each cell one step),
+// and it ends at a root, at tEnd or where the ray leaves B, or (the candidate's own object, whose
+// near miss lets the march go on) after a cell whose values are all at least eps: its far side is
+// tPast. So the first root of a field, and the hit, do not depend on where the search starts: the
+// tile's cone, the world cache, culling and over-relaxation all move that point. The march's own
+// steps on a field are bounded by the distance to the interpolant's zero set as well
+// (marchLocalDistance), so that no step passes a part of it before a search starts.
+//
 // The search is a resumable state machine rather than a loop of its own: rootNext says where to
 // evaluate next (or that the search is over), the march's one evaluation site evaluates there, and
 // rootTake takes the value. A CPU device runs a SIMD group's lanes in lock step and every loop and
@@ -130,11 +168,93 @@ struct RootSearch {
     int side;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
     int r, limit;
     float tPast, sFirst, result;
+    // A field's cell walk (cells, cellStep): the current cell; the walk reuses the secant search's
+    // fields (few registers: a CPU device keeps every lane's state of the loop live): ta where the
+    // walk is, tb where it ends, sb and tp the walk's point with the smallest value / t (the
+    // step-limit rule's candidate: its error and t); voxel is the world size of a stored unit.
+    bool cells;
+    ivec3 cell;
 };
 
+#ifdef SDF_FIELDS
+// The ray ro + rd t in the voxel coordinates of a field object's slot: x = xo + xd t.
+void cellRay(uint obj, vec3 ro, vec3 rd, out vec3 xo, out vec3 xd) {
+    SdfField f = sdfFields[sdfObjects[obj].info.y];
+    xo = ((sdfObjects[obj].worldToLocal * vec4(ro, 1.0)).xyz - f.origin.xyz) / f.origin.w;
+    xd = (mat3(sdfObjects[obj].worldToLocal) * rd) / f.origin.w;
+}
+#endif
+
+#ifdef SDF_FIELDS
+// The first root in s in [0, 1] of the trilinear interpolant of the corners c (index x + 2y + 4z, c[0]
+// > 0 is not assumed) along the segment u(s) = ua + (ub - ua) s of the cell's unit cube; -1 when it
+// has none. Along a line the interpolant is a cubic; its extrema split [0, 1] into monotone pieces,
+// and the first piece whose far end is not above zero holds the root, found by regula falsi
+// (Illinois) on it.
+float cellFirstRoot(float c[8], vec3 ua, vec3 ub) {
+    float k0 = c[0], k1 = c[1] - c[0], k2 = c[2] - c[0], k3 = c[4] - c[0];
+    float k4 = c[3] - c[2] - c[1] + c[0];  // xy
+    float k5 = c[6] - c[4] - c[2] + c[0];  // yz
+    float k6 = c[5] - c[4] - c[1] + c[0];  // xz
+    float k7 = c[7] - c[6] - c[5] - c[3] + c[1] + c[2] + c[4] - c[0];
+    vec3 d = ub - ua;
+    float p = ua.x, q = ua.y, r = ua.z, P = d.x, Q = d.y, R = d.z;
+    float a3 = k7 * P * Q * R;
+    float a2 = k4 * P * Q + k5 * Q * R + k6 * P * R + k7 * (p * Q * R + q * P * R + r * P * Q);
+    float a1 = k1 * P + k2 * Q + k3 * R + k4 * (p * Q + q * P) + k5 * (q * R + r * Q) + k6 * (p * R + r * P) +
+               k7 * (p * q * R + p * r * Q + q * r * P);
+    float a0 = k0 + k1 * p + k2 * q + k3 * r + k4 * p * q + k5 * q * r + k6 * p * r + k7 * p * q * r;
+    if (a0 <= 0.0) return 0.0;
+    // The extrema: 3 a3 s^2 + 2 a2 s + a1 = 0 within (0, 1), in order.
+    float e0 = 2.0, e1 = 2.0;
+    float A = 3.0 * a3, B = 2.0 * a2, C = a1;
+    if (abs(A) > 1e-12 * (abs(B) + abs(C))) {
+        float disc = B * B - 4.0 * A * C;
+        if (disc >= 0.0) {
+            float h = -0.5 * (B + (B >= 0.0 ? sqrt(disc) : -sqrt(disc)));
+            float r0 = h / A, r1 = h != 0.0 ? C / h : r0;
+            e0 = min(r0, r1);
+            e1 = max(r0, r1);
+        }
+    } else if (B != 0.0) {
+        e0 = -C / B;
+    }
+    float lo = 0.0, flo = a0;
+    for (int i = 0; i < 3; ++i) {
+        float hi = i == 0 ? e0 : (i == 1 ? e1 : 1.0);
+        if (!(hi > lo && hi < 1.0) && i < 2) continue;
+        float fhi = ((a3 * hi + a2) * hi + a1) * hi + a0;
+        if (fhi <= 0.0) {
+            // f(lo) > 0 >= f(hi), monotone between: Illinois regula falsi.
+            int side = 0;
+            for (int k = 0; k < 24 && hi - lo > 1e-7; ++k) {
+                float m = (lo * fhi - hi * flo) / (fhi - flo);
+                if (!(m > lo && m < hi)) m = 0.5 * (lo + hi);
+                float fm = ((a3 * m + a2) * m + a1) * m + a0;
+                if (fm > 0.0) {
+                    lo = m;
+                    flo = fm;
+                    if (side == 1) fhi *= 0.5;
+                    side = 1;
+                } else {
+                    hi = m;
+                    fhi = fm;
+                    if (side == -1) flo *= 0.5;
+                    side = -1;
+                }
+            }
+            return hi;
+        }
+        lo = hi;
+        flo = fhi;
+    }
+    return -1.0;
+}
+#endif
+
 // known: s0 is the object's raw distance at t0 (else the first evaluation is at t0).
-void rootStart(inout RootSearch s, uint obj, float t0, float s0, bool known, float gate, float tEnd,
-               float tol, float eps, bool countFirst) {
+void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, float gate,
+               float tEnd, float tol, float eps, bool countFirst) {
     s.obj = obj;
     s.t0 = t0;
     s.gate = gate;
@@ -164,6 +284,30 @@ void rootStart(inout RootSearch s, uint obj, float t0, float s0, bool known, flo
     s.r = known ? 0 : -1;
     s.limit = int(trace.counts.w);
     s.result = -1.0;
+    s.cells = false;
+#ifdef SDF_FIELDS
+    uvec4 info = sdfObjects[obj].info;
+    if (info.x == SDF_KIND_FIELD && s.limit > 0) {
+        // The walk covers the ray's part in the field's box of voxel centres B from t0 to tEnd.
+        SdfField f = sdfFields[info.y];
+        ivec3 dims = ivec3(f.dims.xyz);
+        vec3 xo, xd;
+        cellRay(obj, ro, rd, xo, xd);
+        vec3 inv = 1.0 / xd;
+        vec3 ta = (vec3(0.0) - xo) * inv, tb = (f.dims.xyz - 1.0 - xo) * inv;
+        vec3 tn = min(ta, tb), tf = max(ta, tb);
+        float enter = max(max(tn.x, tn.y), tn.z), exit = min(min(tf.x, tf.y), tf.z);
+        float start = max(t0, enter), end = min(tEnd, exit);
+        if (all(greaterThanEqual(dims, ivec3(2))) && start < end) {
+            s.cells = true;
+            s.ta = start;
+            s.tb = end;
+            s.sb = 3.0e38;
+            s.tp = t0;
+            s.cell = clamp(ivec3(floor(xo + xd * start)), ivec3(0), dims - 2);
+        }
+    }
+#endif
 }
 
 void rootFinish(inout RootSearch s, float result) {
@@ -175,7 +319,7 @@ void rootFinish(inout RootSearch s, float result) {
 // over (s.result: the root, or -1).
 bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
     if (s.done) return false;
-    if (s.r < s.limit) {
+    if (s.r < s.limit || (s.cells && !s.pending)) {
         if (s.pending) {
             s.pending = false;
             s.sFirst = s.sa;
@@ -196,6 +340,8 @@ bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
             float tr;
             if (s.r < 0) {
                 tr = s.t0;
+            } else if (s.cells) {
+                tr = s.ta;  // the next cell (cellStep)
             } else if (s.bracket) {
                 tr = s.side == -2 ? 0.5 * (s.ta + s.tb) : s.ta - s.sa * (s.tb - s.ta) / (s.sb - s.sa);
                 if (!(tr > s.ta && tr < s.tb)) tr = 0.5 * (s.ta + s.tb);
@@ -213,6 +359,9 @@ bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
     if (s.pending) {  // refineSteps 0 (only the first evaluation ran, or none)
         s.sFirst = s.sa;
         rootFinish(s, s.sa >= s.gate ? -1.0 : s.t0);  // every candidate is a hit where it is
+    } else if (s.cells) {
+        s.tPast = s.ta;
+        rootFinish(s, -1.0);
     } else {
         rootFinish(s, s.bracket || s.sa <= 0.1 * s.eps ? s.ta : -1.0);
     }
@@ -270,6 +419,66 @@ void rootTake(inout RootSearch s, float sr, inout uint steps) {
         s.prev = true;
     }
 }
+
+#ifdef SDF_FIELDS
+// One cell of a field's walk (s.cells): its eight stored values, the first root of their trilinear
+// interpolant along the ray within the cell, else on to the next cell. The walk ends at a root, at
+// walkEnd (the search's end or the ray leaving B), or, unless the search runs until its end (a
+// candidate of a decision that has a root already), past a cell whose every value is at least eps
+// at least half an eps after t0: the object's surface is then certainly not crossed before tPast,
+// whatever point the walk started from. Counts as one step.
+void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
+    ++steps;
+    s.r += 1;
+    SdfField f = sdfFields[sdfObjects[s.obj].info.y];
+    ivec3 dims = ivec3(f.dims.xyz);
+    vec3 xo, xd;
+    cellRay(s.obj, ro, rd, xo, xd);
+    ivec3 base = ivec3(f.uvwOffset.xyz) + s.cell;
+    float c[8];
+    float cmin = 3.0e38;
+    for (int k = 0; k < 8; ++k) {
+        c[k] = texelFetch(sdfAtlas, base + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1), 0).r;
+        cmin = min(cmin, c[k]);
+    }
+    // Where the ray leaves the cell (the axis that it crosses first) or the walk ends.
+    float tc = s.ta;
+    vec3 tb = (vec3(s.cell) + step(vec3(0.0), xd) - xo) / xd;
+    tb = mix(tb, vec3(3.0e38), equal(xd, vec3(0.0)));
+    float tOut = max(min(min(min(tb.x, tb.y), tb.z), s.tb), tc);
+    vec3 ua = xo + xd * tc - vec3(s.cell);
+    if (cmin <= 0.0) {
+        float root = cellFirstRoot(c, ua, xo + xd * tOut - vec3(s.cell));
+        if (root >= 0.0) {
+            rootFinish(s, tc + root * (tOut - tc));
+            return;
+        }
+    }
+    // The interpolant where the ray enters the cell: a candidate for the step-limit rule.
+    vec3 u = clamp(ua, vec3(0.0), vec3(1.0));
+    vec4 cx = mix(vec4(c[0], c[2], c[4], c[6]), vec4(c[1], c[3], c[5], c[7]), u.x);
+    vec2 cy = mix(cx.xz, cx.yw, u.y);
+    float err = max(mix(cy.x, cy.y, u.z), 0.0) * s.voxel / max(tc, 1e-6);
+    if (err < s.sb) {
+        s.sb = err;
+        s.tp = tc;
+    }
+    // On across the face the ray leaves by (no dynamic component index: a CPU device would keep
+    // the vector in memory).
+    bvec3 leaves = tb.x <= tb.y && tb.x <= tb.z ? bvec3(true, false, false)
+                                                : (tb.y <= tb.z ? bvec3(false, true, false) : bvec3(false, false, true));
+    ivec3 next = s.cell + ivec3(leaves) * ivec3(sign(xd));
+    bool far = cmin * s.voxel >= s.eps && tOut >= s.t0 + 0.5 * s.eps;
+    if (tOut >= s.tb || any(lessThan(next, ivec3(0))) || any(greaterThan(next, dims - 2)) ||
+        (far && !s.countFirst)) {
+        s.tPast = tOut;
+        rootFinish(s, -1.0);
+        return;
+    }
+    s.cell = next;
+    s.ta = tOut;
+}
+#endif
 
 // The gradient of the object's world distance over a tetrahedron of offsets h (4 evaluations).
 vec3 objectNormal(uint obj, vec3 p, float h) {
@@ -345,6 +554,8 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 }
                 // The search of `decision` is over.
                 float tj = search.result;
+                if (search.cells)  // the walk's nearest point, for the step-limit rule
+                    keepBestCandidate(search.sb, search.tp, search.obj, bestError, bestT, bestObject);
                 if (decision < 0) {
                     // The candidate's object (its raw distance: for a field evaluated by the
                     // search, for a shape the step's own; not below eps: no candidate, below zero:
@@ -369,7 +580,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                     if (obj == dNearest || obj == 0xffffffffu) continue;
                     float gap = dRoot != 0xffffffffu ? dBest - t : dEps;
                     if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
-                    rootStart(search, obj, t, dD, false, gap, min(dBest, tMax), dTol, dEps, true);
+                    rootStart(search, obj, ro, rd, t, dD, false, gap, min(dBest, tMax), dTol, dEps, true);
                     started = true;
                     break;
                 }
@@ -437,11 +648,17 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
 #endif
             evaluate = !cacheStep;
         }
+#ifdef SDF_FIELDS
+        if (deciding && evaluate && search.cells && search.r >= 0) {
+            cellStep(search, ro, rd, steps);  // a field's search walks its cells (stored values, no filter)
+            continue;
+        }
+#endif
         // (c) The one evaluation site.
         uint nearest = 0xffffffffu;
         float second = cached;
         float d = cached;
-        if (evaluate) d = sceneDistance(q, tFrom, evalSafety, only, nearest, second);
+        if (evaluate) d = sceneDistance(q, tFrom, evalSafety, only, !deciding, nearest, second);
         // (d) Take the value.
         if (deciding) {
             rootTake(search, d, steps);
@@ -489,10 +706,10 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             dInside = false;
             dTol = max(kRootTolerance * eps, 1e-6 * t);
             bool known = !(safety > 0.0 && sdfObjectVoxel(nearest) > 0.0);
-            rootStart(search, nearest, t, d, known, eps, tMax, dTol, eps, false);
+            rootStart(search, nearest, ro, rd, t, d, known, eps, tMax, dTol, eps, false);
             continue;
         }
-        keepBestCandidate(d / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
+        keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
         prevRadius = radius;
         prevT = t;
         stepLength = omega * d;

@@ -50,15 +50,20 @@ float sdfBoxDistance(uint object, vec3 pl) {
     return length(max(q, vec3(0.0))) * sdfObjects[object].boundsMin.w;
 }
 
+// Signed distance of a shape object (info: its SdfObject::info) in local units at local position pl.
+float sdfShapeDistance(uvec4 info, vec3 pl) {
+#ifdef SHAPE_PRIMITIVES
+    // Every shape object of the frame is one shape (SdfSceneBuffers::shapePrimitives).
+    return evalShapePrimitive(info.y, pl);
+#else
+    return evalShapeProgram(info.y, pl);
+#endif
+}
+
 // Signed distance in the object's local units at local position pl.
 float sdfLocalDistance(uint object, vec3 pl, float fieldSafety) {
     uvec4 info = sdfObjects[object].info;
-#ifdef SHAPE_PRIMITIVES
-    // Every shape object of the frame is one shape (SdfSceneBuffers::shapePrimitives).
-    if (info.x == SDF_KIND_SHAPES) return evalShapePrimitive(info.y, pl);
-#else
-    if (info.x == SDF_KIND_SHAPES) return evalShapeProgram(info.y, pl);
-#endif
+    if (info.x == SDF_KIND_SHAPES) return sdfShapeDistance(info, pl);
 #ifdef SDF_FIELDS
     return sdfFieldDistance(info.y, pl) - fieldSafety * sdfFieldInterpolationBound(info.y, pl);
 #else

@@ -412,8 +412,10 @@ TEST_P(StabilityBaked, Case06a_TwoBakedBoxesHalfAVoxelApart) {
                 otherMiss += !g.hit(i);
                 otherDeep += aBox && zHit < zExact - hd.voxelSize;
                 if (other <= 4)
-                    std::printf("    06a other px %u,%u: id %d (expect %d), z %.6f (front 0.5, exact %.6f)\n",
-                                x, y, g.id(i), expect, zHit, zExact);
+                    std::printf(
+                        "    06a other px %u,%u: id %d (expect %d), z %.6f (front 0.5, exact %.6f), "
+                        "%.0f steps\n",
+                        x, y, g.id(i), expect, zHit, zExact, g.aux[i].y);
             }
         }
     summary("06a baked boxes 0.5 voxel", backend(),
@@ -428,8 +430,11 @@ TEST_P(StabilityBaked, Case06a_TwoBakedBoxesHalfAVoxelApart) {
     EXPECT_TRUE(checkSanity(g, 0.01f, 100.0f).ok());
     EXPECT_GT(gapPx, size_t(h));  // the gap is visible: at least one pixel per row
     EXPECT_EQ(wrongSide, 0u);
-    // Measured 2026-12-01: 240 gap pixels, 40 closed at the front face, 200 in between (30 owned by
-    // the other box), 0 other; 0 wrong-side ids outside the gap.
+    // Measured 2026-12-02 (both backends), since a field's hit decision walks the interpolant's
+    // cells for its exact root: 240 gap pixels, 204 at the exact side-face depth, 8 closed at the
+    // front face, 28 in between (10 owned by the other box),
+    // 0 other; 0 wrong-side ids outside the gap. Before (secant steps on the filtered value): 0 exact,
+    // 40 closed at the front face, 200 in between.
     EXPECT_EQ(other, 0u);
 }
 
