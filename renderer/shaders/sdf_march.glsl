@@ -90,6 +90,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
+    g_nearestUncapped = 3.0e38;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
     uint count = one ? 1u : candidateCount();
@@ -423,7 +424,7 @@ void rootTake(inout RootSearch s, float sr, inout uint steps) {
 #ifdef SDF_FIELDS
 // One cell of a field's walk (s.cells): its eight stored values, the first root of their trilinear
 // interpolant along the ray within the cell, else on to the next cell. The walk ends at a root, at
-// walkEnd (the search's end or the ray leaving B), or, unless the search runs until its end (a
+// s.tb (the search's end or the ray leaving B), or, unless the search runs until its end (a
 // candidate of a decision that has a root already), past a cell whose every value is at least eps
 // at least half an eps after t0: the object's surface is then certainly not crossed before tPast,
 // whatever point the walk started from. Counts as one step.
