@@ -129,6 +129,8 @@ float sdfFieldHardwareTerm(SdfField f) {
     return 3.0 * (0.00390625 + atlasSize * 2.384185791015625e-7) + 3.0 * SDF_FIELD_SHRINK;
 }
 
+// The slot-indexed forms; the *Of forms take a record already loaded (a caller that needs both
+// loads it once).
 float sdfFieldDistance(uint slot, vec3 p) { return sdfFieldDistanceOf(sdfFields[slot], p); }
 
 float sdfFieldInterpolationBoundOf(SdfField f, vec3 p) {

@@ -178,9 +178,8 @@ struct RootSearch {
 };
 
 #ifdef SDF_FIELDS
-// The ray ro + rd t in the voxel coordinates of a field object's slot: x = xo + xd t.
-void cellRay(uint obj, vec3 ro, vec3 rd, out vec3 xo, out vec3 xd) {
-    SdfField f = sdfFields[sdfObjects[obj].info.y];
+// The ray ro + rd t in the voxel coordinates of a field object's slot f: x = xo + xd t.
+void cellRay(uint obj, SdfField f, vec3 ro, vec3 rd, out vec3 xo, out vec3 xd) {
     xo = ((sdfObjects[obj].worldToLocal * vec4(ro, 1.0)).xyz - f.origin.xyz) / f.origin.w;
     xd = (mat3(sdfObjects[obj].worldToLocal) * rd) / f.origin.w;
 }
@@ -293,7 +292,7 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
         SdfField f = sdfFields[info.y];
         ivec3 dims = ivec3(f.dims.xyz);
         vec3 xo, xd;
-        cellRay(obj, ro, rd, xo, xd);
+        cellRay(obj, f, ro, rd, xo, xd);
         vec3 inv = 1.0 / xd;
         vec3 ta = (vec3(0.0) - xo) * inv, tb = (f.dims.xyz - 1.0 - xo) * inv;
         vec3 tn = min(ta, tb), tf = max(ta, tb);
@@ -434,7 +433,7 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     SdfField f = sdfFields[sdfObjects[s.obj].info.y];
     ivec3 dims = ivec3(f.dims.xyz);
     vec3 xo, xd;
-    cellRay(s.obj, ro, rd, xo, xd);
+    cellRay(s.obj, f, ro, rd, xo, xd);
     ivec3 base = ivec3(f.uvwOffset.xyz) + s.cell;
     float c[8];
     float cmin = 3.0e38;

@@ -65,7 +65,8 @@ float sdfLocalDistance(uint object, vec3 pl, float fieldSafety) {
     uvec4 info = sdfObjects[object].info;
     if (info.x == SDF_KIND_SHAPES) return sdfShapeDistance(info, pl);
 #ifdef SDF_FIELDS
-    return sdfFieldDistance(info.y, pl) - fieldSafety * sdfFieldInterpolationBound(info.y, pl);
+    SdfField f = sdfFields[info.y];  // the slot's record loaded once for both
+    return sdfFieldDistanceOf(f, pl) - fieldSafety * sdfFieldInterpolationBoundOf(f, pl);
 #else
     return SHAPE_FAR;
 #endif
