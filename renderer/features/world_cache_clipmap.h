@@ -27,9 +27,12 @@
 // cells disagree" rule: the nearest object's true distance gains at most sqrt(3)/2 h + s_i and every
 // other's loses at most as much anywhere in the cell, so the named object is the nearest
 // everywhere in it. U_1 (sdf_world_cache_update.comp): exact shape programs (shapes, unions,
-// transforms) under any scale (sigma_max / sigma_min times the value outside); smooth or
-// subtractive CSG, repetition and fields have none (their cells stay UNCERTAIN: a field's
-// interpolated surface, the one the trace hits, may lie nearer than its mesh's).
+// transforms) under any scale (sigma_max / sigma_min times the value outside); fields where c lies
+// in their box of voxel centres (interpolant + interpolation bound + the margin by which the
+// interpolant may exceed the mesh distance: an upper bound of the mesh distance and of what the
+// trace steps on the field); smooth or subtractive CSG and repetition have none (their cells stay
+// UNCERTAIN). A field's d_obj is also a lower bound of the distance to its interpolated surface
+// (sdfFieldRootDistance), the one the trace hits, which may lie nearer than its mesh.
 //
 // Changes: per object (keyed by entity index) and per level the model matrix at its last update of
 // that level is kept (the reference). It moved for level i when a world box corner moved more than

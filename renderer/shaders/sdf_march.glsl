@@ -523,6 +523,14 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     hitObject = 0xffffffffu;
     float omega = trace.epsilons.z;
     float prevRadius = 0.0, stepLength = 0.0, prevT = t;
+    // The voxel of the last cache lookup that gave neither a cache step nor an id-field object (0:
+    // none, or the last one gave something). While the march's last evaluated distance stays below
+    // two of those voxels the point is as near a surface as it was there, and the lookup is
+    // skipped: a cache step needs more than two voxels of clearance, and the cells that near a
+    // surface are the uncertain ones. Skipping only moves the march's samples (the objects are
+    // evaluated instead), never the picture.
+    float cacheQuiet = 0.0;
+    bool listNext = false;  // evaluate the candidates here without the cache (the id field's object was near)
     float bestError = 3.0e38, bestT = t;
     uint bestObject = 0xffffffffu;
     // The hit decision in progress (deciding): at the march point t, where the safe distance d of
@@ -633,7 +641,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
 #ifndef SDF_MARCH_NO_CACHE
             float cacheVoxel;
             uint cacheObject;
-            if (sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
+            if (!listNext && !(prevRadius < 2.0 * cacheQuiet) && sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
                 // Beyond two voxels the cached lower bound (the exact distance less at most about
                 // one voxel of margin and cell extent) is at least about half the exact step;
                 // beyond two hit epsilons the point is no hit candidate, so every candidate and
@@ -644,9 +652,11 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                             cacheSteps < stepLimit;
                 if (!cacheStep && (trace.accel.x & kIdFlag) != 0u && cacheObject < trace.counts.x)
                     only = cacheObject;  // NONE, UNCERTAIN and occluder-only objects: the list
+                cacheQuiet = cacheStep || only != 0xffffffffu ? 0.0 : cacheVoxel;
             }
 #endif
             evaluate = !cacheStep;
+            listNext = false;
         }
 #ifdef SDF_FIELDS
         if (deciding && evaluate && search.cells && search.r >= 0) {
@@ -659,6 +669,15 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         float second = cached;
         float d = cached;
         if (evaluate) d = sceneDistance(q, tFrom, evalSafety, only, !deciding, nearest, second);
+        if (!deciding && only != 0xffffffffu && d < eps) {
+            // The id field's object is a hit candidate: the hit decision starts from every
+            // candidate's distance here, as without the id field (its near-miss step stays within
+            // the others' safe distance, which the one evaluation does not give). The next
+            // iteration evaluates them at the same point (one evaluation site: a CPU device would
+            // otherwise keep a second copy of the loop's largest part live).
+            listNext = true;
+            continue;
+        }
         // (d) Take the value.
         if (deciding) {
             rootTake(search, d, steps);

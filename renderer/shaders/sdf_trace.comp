@@ -48,8 +48,11 @@
 // whose point lies in a clipmap level, a cached distance above two voxels and two hit epsilons is
 // taken as a plain safe step with no object evaluated (such steps have their own limit and do not
 // count against the step limit); nearer, when the id field names a traced object for the point's
-// cell, that object alone is evaluated (it is the nearest everywhere in the cell); otherwise the
-// list (or every object). With ID but not CACHE only the id part is used.
+// cell, that object alone is evaluated (it is the nearest everywhere in the cell; once it is within
+// the hit epsilon the list is evaluated at the same point, so the hit decision starts from every
+// candidate's distance); otherwise the list (or every object). With ID but not CACHE only the id
+// part is used. While the march's last distance stays below two voxels of the last lookup that
+// gave neither a cache step nor an object, the lookup is skipped (sdf_march.glsl).
 // Cone prepass (flag PREPASS; sdf_cone_prepass.comp ran before): every ray of an 8x8 tile starts no
 // nearer than where the tile's cone touched a surface; the hit decision does not depend on where
 // the march starts, so the picture stays.

@@ -2,14 +2,17 @@
 // world_cache_clipmap.h documents the values and margins, sdf_world_cache.h the passes). One
 // workgroup per job (a box of at most 8^3 voxels of one level), one invocation per voxel:
 //   recompute: D = min(T, d_1) - margin over the job's objects (every object within T + slack of
-//              the box), id = the nearest when d_2 - U >= sqrt(3) h + 2 slack, U an upper bound of
-//              its true distance at c (upperDistance: exact programs under any scale; none for
-//              fields and inexact programs), UNCERTAIN otherwise, NONE when d_1 >= T;
+//              the box), id = the nearest when d_2 - U >= sqrt(3) h + 2 slack, U an upper bound at c
+//              of its true distance and of the distance the trace steps on it (upperDistance: exact
+//              programs under any scale, fields where c lies in their box of voxel centres; none for
+//              inexact programs), UNCERTAIN otherwise, NONE when d_1 >= T;
 //   splat:     D = min(D, d_1 - margin) over the job's (changed) objects, id = UNCERTAIN unless it
 //              was NONE and stays so (no listed object within T).
-// Distances are sdfObjectDistance(o, c, 1) at the voxel centre c (sdf_scene.glsl), raised outside
-// the object's bounds box to the distance to that box: both are lower bounds of the distance to
-// the solid, which lies in the box.
+// Distances are lower bounds at the voxel centre c of the distance to the object's solid and to
+// the surface the trace finds on it (objectLowerBound): sdfObjectDistance(o, c, 1) (sdf_scene.glsl),
+// for a field also its sdfFieldRootDistance (the trace's surface of a field is the zero set of its
+// trilinear interpolant, which may lie up to about a voxel nearer than the mesh), raised outside
+// the object's bounds box to the distance to that box (the solid and that zero set lie in it).
 #version 450
 #pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
@@ -62,15 +65,49 @@ float upperDistance(uint o, vec3 c, float d) {
         if ((cacheObjectFlags[o] & kExactProgram) == 0u) return 3.0e38;
         local = d / sigmaMin;
     } else {
-        // Fields: an upper bound of the mesh distance is known inside the voxel box (interpolant +
-        // interpolation bound), but the trace's surface is the interpolant's zero set, which may
-        // lie up to that bound nearer than the mesh: naming a field let the trace step past
-        // another field's interpolated surface (AccelParity.Meshes: 22 px of other entities).
-        // Cells nearest to a field stay UNCERTAIN.
+#ifdef SDF_FIELDS
+        // Fields, where c lies in the box of voxel centres B (outside it the field's value is only
+        // a lower bound): the mesh distance f <= raw + bound + the storage rounding (< 2^-10 of the
+        // value, the atlas's halfs) at c (sdf_field.glsl), and what the
+        // trace steps on the field at a point p of the cell (marchLocalDistance: at most the
+        // filtered value raw(p)) is at most f(p) + margin (|interpolant - f| <= the interpolation
+        // bound <= sqrt(3)/2 voxel + the hardware term), f being 1-Lipschitz: local = raw + bound +
+        // margin bounds both at c, and the cell's extent is added by the caller (sqrt(3)/2 h per
+        // side, in world units, which sigma_min converts: the step is sigma_min times the local
+        // value, and a local point moves at most 1 / sigma_min times the world offset).
+        const SdfField f = sdfFields[sdfObjects[o].info.y];
+        const vec3 pl = sdfToLocal(o, c);
+        const vec3 x = sdfFieldVoxelCoord(f, pl);
+        if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, f.dims.xyz - 1.0))) return 3.0e38;
+        const float raw = sdfFieldDistanceOf(f, pl);
+        const float bound = sdfFieldInterpolationBoundOf(f, pl);
+        const float margin = (0.8660254 + sdfFieldHardwareTerm(f)) * f.origin.w;
+        local = raw + bound + margin + abs(raw) * 0.0009765625;
+#else
         return 3.0e38;
+#endif
     }
     const float world = local > 0.0 ? local * sigmaMax : local * sigmaMin;
     return world + 1.0e-5 * max(1.0, length(c)) + 1.0e-6 * abs(world);  // float evaluation
+}
+
+// A lower bound at c of the object's world distance to its solid and to the surface the trace finds
+// on it (fields: the zero set of the interpolant, sdfFieldRootDistance), raised outside the
+// object's bounds box to the distance to that box; box is that distance.
+float objectLowerBound(uint o, vec3 c, float box) {
+    const vec3 pl = sdfToLocal(o, c);
+    float d;
+#ifdef SDF_FIELDS
+    const uvec4 info = sdfObjects[o].info;
+    if (info.x == SDF_KIND_FIELD) {
+        const SdfField f = sdfFields[info.y];
+        const float raw = sdfFieldDistanceOf(f, pl);
+        const float bound = sdfFieldInterpolationBoundOf(f, pl);
+        d = sdfObjects[o].boundsMin.w * min(raw - bound, sdfFieldRootDistance(f, pl, raw, bound));
+    } else
+#endif
+        d = sdfObjects[o].boundsMin.w * sdfLocalDistance(o, pl, 1.0);
+    return box > 0.0 ? max(d, box) : d;
 }
 
 void main() {
@@ -99,8 +136,7 @@ void main() {
         // is kept as it is.
         const float box = sdfBoxDistance(o, sdfToLocal(o, c));
         if (box >= d2) continue;
-        const float own = sdfObjectDistance(o, c, 1.0);
-        const float d = box > 0.0 ? max(own, box) : own;
+        const float d = objectLowerBound(o, c, box);
         if (d < d1) {
             d2 = d1;
             d1 = d;
