@@ -53,7 +53,7 @@ const uint kExactProgram = 1u;  // CacheObjectFlags: the shape program's value i
 // d / sigma_min is the true local distance. World from local: outside (> 0) at most sigma_max
 // times, inside at most sigma_min times (a negative value), sigma_max^2 <= the largest Gershgorin
 // row sum of M^T M.
-float upperDistance(uint o, vec3 c, float d) {
+float upperDistance(uint o, vec3 c, float d, vec2 rawBound) {
     const mat3 m = mat3(sdfObjects[o].model);
     const mat3 g = transpose(m) * m;
     float rowMax = 0.0;
@@ -76,11 +76,9 @@ float upperDistance(uint o, vec3 c, float d) {
         // side, in world units, which sigma_min converts: the step is sigma_min times the local
         // value, and a local point moves at most 1 / sigma_min times the world offset).
         const SdfField f = sdfFields[sdfObjects[o].info.y];
-        const vec3 pl = sdfToLocal(o, c);
-        const vec3 x = sdfFieldVoxelCoord(f, pl);
+        const vec3 x = sdfFieldVoxelCoord(f, sdfToLocal(o, c));
         if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, f.dims.xyz - 1.0))) return 3.0e38;
-        const float raw = sdfFieldDistanceOf(f, pl);
-        const float bound = sdfFieldInterpolationBoundOf(f, pl);
+        const float raw = rawBound.x, bound = rawBound.y;  // objectLowerBound's
         const float margin = (0.8660254 + sdfFieldHardwareTerm(f)) * f.origin.w;
         local = raw + bound + margin + abs(raw) * 0.0009765625;
 #else
@@ -91,22 +89,24 @@ float upperDistance(uint o, vec3 c, float d) {
     return world + 1.0e-5 * max(1.0, length(c)) + 1.0e-6 * abs(world);  // float evaluation
 }
 
-// A lower bound at c of the object's world distance to its solid and to the surface the trace finds
+// A lower bound at c (local position pl) of the object's world distance to its solid and to the surface the trace finds
 // on it (fields: the zero set of the interpolant, sdfFieldRootDistance), raised outside the
-// object's bounds box to the distance to that box; box is that distance.
-float objectLowerBound(uint o, vec3 c, float box) {
-    const vec3 pl = sdfToLocal(o, c);
+// object's bounds box to the distance to that box; box is that distance. rawBound: a field's
+// local value and interpolation bound at c (for upperDistance).
+float objectLowerBound(uint o, vec3 pl, float box, out vec2 rawBound) {
+    rawBound = vec2(0.0);
+    const uvec4 info = sdfObjects[o].info;
     float d;
 #ifdef SDF_FIELDS
-    const uvec4 info = sdfObjects[o].info;
     if (info.x == SDF_KIND_FIELD) {
         const SdfField f = sdfFields[info.y];
         const float raw = sdfFieldDistanceOf(f, pl);
         const float bound = sdfFieldInterpolationBoundOf(f, pl);
         d = sdfObjects[o].boundsMin.w * min(raw - bound, sdfFieldRootDistance(f, pl, raw, bound));
+        rawBound = vec2(raw, bound);
     } else
 #endif
-        d = sdfObjects[o].boundsMin.w * sdfLocalDistance(o, pl, 1.0);
+        d = sdfObjects[o].boundsMin.w * sdfShapeDistance(info, pl);
     return box > 0.0 ? max(d, box) : d;
 }
 
@@ -126,6 +126,7 @@ void main() {
 
     float d1 = truncation, d2 = truncation;
     uint nearest = SDF_CACHE_NONE;
+    vec2 nearestRawBound = vec2(0.0);
     for (uint k = 0u; k < job.list.y; ++k) {
         const uint o = cacheObjectList[job.list.x + k];
         if (o >= pc.jobs.y) continue;
@@ -134,13 +135,16 @@ void main() {
         // not evaluated, and every evaluated distance is raised to its box distance (so the result
         // does not depend on the order of the list). Inside the box (box = 0) the signed distance
         // is kept as it is.
-        const float box = sdfBoxDistance(o, sdfToLocal(o, c));
+        const vec3 pl = sdfToLocal(o, c);
+        const float box = sdfBoxDistance(o, pl);
         if (box >= d2) continue;
-        const float d = objectLowerBound(o, c, box);
+        vec2 rawBound;
+        const float d = objectLowerBound(o, pl, box, rawBound);
         if (d < d1) {
             d2 = d1;
             d1 = d;
             nearest = o;
+            nearestRawBound = rawBound;
         } else {
             d2 = min(d2, d);
         }
@@ -154,9 +158,11 @@ void main() {
         return;
     }
     // Certain: for every p in the cell the nearest's true distance <= U + sqrt(3)/2 h + slack <=
-    // d_2 - sqrt(3)/2 h - slack <= every other object's true distance.
+    // d_2 - sqrt(3)/2 h - slack <= every other object's true distance. U >= d_1 (an upper and a
+    // lower bound of one distance), so a gap below d_1 needs no U.
     uint id = nearest;
-    if (nearest != SDF_CACHE_NONE && !(d2 - 1.7320509 * h - 2.0 * slack >= upperDistance(nearest, c, d1)))
+    const float gap = d2 - 1.7320509 * h - 2.0 * slack;
+    if (nearest != SDF_CACHE_NONE && !(gap >= d1 && gap >= upperDistance(nearest, c, d1, nearestRawBound)))
         id = SDF_CACHE_UNCERTAIN;
     imageStore(cacheDistanceImage, t, vec4(d1 - margin));
     imageStore(cacheIdImage, t, uvec4(id));
