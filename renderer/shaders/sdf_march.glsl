@@ -33,6 +33,7 @@ uint g_tileFirst, g_tileCount;
 bool g_tileAll;
 uint g_evaluations;  // object distance evaluations of this pixel (kCountEvalsFlag)
 float g_nearestUncapped;  // sceneDistance's nearest object's distance without sdfFieldRootDistance
+float g_nearestRaw;  // and its raw value (a field's filtered value, no safety bound: the hit decision's)
 
 #ifdef SDF_MARCH_NO_TILES
 uint tileObject(uint i) { return i; }
@@ -59,13 +60,14 @@ uint candidateObject(uint i, float tFrom) {
 // hit decision searches: trace.counts.w > 0) a field's value is also at most sdfFieldRootDistance,
 // so that no step passes a part of the surface that the decision's cell walk would find (where the
 // trilinear interpolant bulges out of the baked surface by up to its interpolation bound): whether
-// a ray hits a field then does not depend on where its steps landed.
-float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out float uncapped) {
+// a ray hits a field then does not depend on where its steps landed. raw: the raw value (the hit
+// decision's: fieldSafety 0, no rootBound).
+float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out float uncapped, out float raw) {
     uvec4 info = sdfObjects[obj].info;
 #ifdef SDF_FIELDS
     if (info.x == SDF_KIND_FIELD) {
         SdfField f = sdfFields[info.y];
-        float raw = sdfFieldDistanceOf(f, pl);
+        raw = sdfFieldDistanceOf(f, pl);
         bool bounds = rootBound && trace.counts.w > 0u;
         float bound = safety > 0.0 || bounds ? sdfFieldInterpolationBoundOf(f, pl) : 0.0;
         uncapped = raw - safety * bound;
@@ -73,6 +75,7 @@ float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out fl
     }
 #endif
     uncapped = sdfShapeDistance(info, pl);
+    raw = uncapped;
     return uncapped;
 }
 
@@ -91,6 +94,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
     g_nearestUncapped = 3.0e38;
+    g_nearestRaw = 3.0e38;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
     uint count = one ? 1u : candidateCount();
@@ -106,13 +110,14 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound
             }
         }
         ++g_evaluations;
-        float ui;
-        float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, rootBound, ui);
+        float ui, ri;
+        float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, rootBound, ui, ri);
         if (di < d || one) {
             second = d;
             d = di;
             nearest = obj;
             g_nearestUncapped = sdfObjects[obj].boundsMin.w * ui;
+            g_nearestRaw = sdfObjects[obj].boundsMin.w * ri;
         } else {
             second = min(second, di);
         }
@@ -724,8 +729,9 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             dRoot = 0xffffffffu;
             dInside = false;
             dTol = max(kRootTolerance * eps, 1e-6 * t);
-            bool known = !(safety > 0.0 && sdfObjectVoxel(nearest) > 0.0);
-            rootStart(search, nearest, ro, rd, t, d, known, eps, tMax, dTol, eps, false);
+            // The candidate's raw value here is known from this step's evaluation (the same value
+            // the search's own first evaluation would take).
+            rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
             continue;
         }
         keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
