@@ -24,6 +24,15 @@ function(configure_fixture build_dir shader_dir)
   endif()
 endfunction()
 
+# Writes an edit to a source file, a little over a second after the last build: the kernel stamps
+# files from a coarse clock (a few milliseconds; a second on some filesystems), so an edit written
+# in the tick in which the build wrote its outputs has their mtime and ninja, which rebuilds only
+# for a newer input, would see nothing to do (seen under a parallel ctest run).
+function(edit_source path content)
+  execute_process(COMMAND "${CMAKE_COMMAND}" -E sleep 1.1)
+  file(WRITE "${path}" "${content}")
+endfunction()
+
 function(build_fixture build_dir out_rc out_text)
   execute_process(COMMAND "${CMAKE_COMMAND}" --build "${build_dir}"
                   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE out)
@@ -64,14 +73,14 @@ if(NOT rc EQUAL 0 OR out MATCHES "${marker}")
 endif()
 
 # Edit the included file (new content so the generated code changes too).
-file(WRITE "${WORK}/good-src/common.glsl" "float commonValue() { return 2.0; }\n")
+edit_source("${WORK}/good-src/common.glsl" "float commonValue() { return 2.0; }\n")
 build_fixture("${WORK}/good-build" rc out)
 if(NOT rc EQUAL 0 OR NOT out MATCHES "${marker}")
   message(FATAL_ERROR "editing an #included file did not rebuild the program:\n${out}")
 endif()
 
 # Break the included file: the build must fail and name the include with its line.
-file(WRITE "${WORK}/good-src/common.glsl" "float commonValue() {\n    return missingThing;\n}\n")
+edit_source("${WORK}/good-src/common.glsl" "float commonValue() {\n    return missingThing;\n}\n")
 build_fixture("${WORK}/good-build" rc out)
 if(rc EQUAL 0 OR NOT out MATCHES "common\\.glsl:2: error: ")
   message(FATAL_ERROR "an error in an #included file did not fail the build with common.glsl:2:\n${out}")
