@@ -180,6 +180,7 @@ struct RootSearch {
     // step-limit rule's candidate: its error and t); voxel is the world size of a stored unit.
     bool cells;
     ivec3 cell;
+    vec3 xo, xd;  // the ray in the field slot's voxel coordinates (cellRay)
 };
 
 #ifdef SDF_FIELDS
@@ -298,6 +299,8 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
         ivec3 dims = ivec3(f.dims.xyz);
         vec3 xo, xd;
         cellRay(obj, f, ro, rd, xo, xd);
+        s.xo = xo;
+        s.xd = xd;
         vec3 inv = 1.0 / xd;
         vec3 ta = (vec3(0.0) - xo) * inv, tb = (f.dims.xyz - 1.0 - xo) * inv;
         vec3 tn = min(ta, tb), tf = max(ta, tb);
@@ -437,8 +440,7 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     s.r += 1;
     SdfField f = sdfFields[sdfObjects[s.obj].info.y];
     ivec3 dims = ivec3(f.dims.xyz);
-    vec3 xo, xd;
-    cellRay(s.obj, f, ro, rd, xo, xd);
+    vec3 xo = s.xo, xd = s.xd;
     ivec3 base = ivec3(f.uvwOffset.xyz) + s.cell;
     float c[8];
     float cmin = 3.0e38;
