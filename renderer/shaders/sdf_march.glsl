@@ -62,7 +62,8 @@ uint candidateObject(uint i, float tFrom) {
 // trilinear interpolant bulges out of the baked surface by up to its interpolation bound): whether
 // a ray hits a field then does not depend on where its steps landed. raw: the raw value (the hit
 // decision's: fieldSafety 0, no rootBound).
-float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out float uncapped, out float raw) {
+float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out float uncapped,
+                         out float raw) {
     uvec4 info = sdfObjects[obj].info;
 #ifdef SDF_FIELDS
     if (info.x == SDF_KIND_FIELD) {
@@ -537,7 +538,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     // surface are the uncertain ones. Skipping only moves the march's samples (the objects are
     // evaluated instead), never the picture.
     float cacheQuiet = 0.0;
-    bool listNext = false;  // evaluate the candidates here without the cache (the id field's object was near)
+    bool listNext = false;  // evaluate the candidates here, no cache (the id field's object was near)
     float bestError = 3.0e38, bestT = t;
     uint bestObject = 0xffffffffu;
     // The hit decision in progress (deciding): at the march point t, where the safe distance d of
@@ -648,7 +649,8 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
 #ifndef SDF_MARCH_NO_CACHE
             float cacheVoxel;
             uint cacheObject;
-            if (!listNext && !(prevRadius < 2.0 * cacheQuiet) && sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
+            bool lookup = !listNext && !(prevRadius < 2.0 * cacheQuiet);
+            if (lookup && sdfCacheLookup(q, cached, cacheVoxel, cacheObject)) {
                 // Beyond two voxels the cached lower bound (the exact distance less at most about
                 // one voxel of margin and cell extent) is at least about half the exact step;
                 // beyond two hit epsilons the point is no hit candidate, so every candidate and

@@ -68,13 +68,13 @@ float upperDistance(uint o, vec3 c, float d, vec2 rawBound) {
 #ifdef SDF_FIELDS
         // Fields, where c lies in the box of voxel centres B (outside it the field's value is only
         // a lower bound): the mesh distance f <= raw + bound + the storage rounding (< 2^-10 of the
-        // value, the atlas's halfs) at c (sdf_field.glsl), and what the
-        // trace steps on the field at a point p of the cell (marchLocalDistance: at most the
-        // filtered value raw(p)) is at most f(p) + margin (|interpolant - f| <= the interpolation
-        // bound <= sqrt(3)/2 voxel + the hardware term), f being 1-Lipschitz: local = raw + bound +
-        // margin bounds both at c, and the cell's extent is added by the caller (sqrt(3)/2 h per
-        // side, in world units, which sigma_min converts: the step is sigma_min times the local
-        // value, and a local point moves at most 1 / sigma_min times the world offset).
+        // value, the atlas's halfs) at c (sdf_field.glsl), and what the trace steps on the field
+        // at a point p of the cell (marchLocalDistance: at most the filtered value raw(p)) is at
+        // most f(p) + margin (|interpolant - f| <= the interpolation bound <= sqrt(3)/2 voxel +
+        // the hardware term), f being 1-Lipschitz: local = raw + bound + margin bounds both at c,
+        // and the cell's extent is added by the caller (sqrt(3)/2 h per side, in world units,
+        // which sigma_min converts: the step is sigma_min times the local value, and a local point
+        // moves at most 1 / sigma_min times the world offset).
         const SdfField f = sdfFields[sdfObjects[o].info.y];
         const vec3 x = sdfFieldVoxelCoord(f, sdfToLocal(o, c));
         if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, f.dims.xyz - 1.0))) return 3.0e38;
@@ -89,10 +89,10 @@ float upperDistance(uint o, vec3 c, float d, vec2 rawBound) {
     return world + 1.0e-5 * max(1.0, length(c)) + 1.0e-6 * abs(world);  // float evaluation
 }
 
-// A lower bound at c (local position pl) of the object's world distance to its solid and to the surface the trace finds
-// on it (fields: the zero set of the interpolant, sdfFieldRootDistance), raised outside the
-// object's bounds box to the distance to that box; box is that distance. rawBound: a field's
-// local value and interpolation bound at c (for upperDistance).
+// A lower bound at c (local position pl) of the object's world distance to its solid and to the
+// surface the trace finds on it (fields: the zero set of the interpolant, sdfFieldRootDistance),
+// raised outside the object's bounds box to the distance to that box; box is that distance.
+// rawBound: a field's local value and interpolation bound at c (for upperDistance).
 float objectLowerBound(uint o, vec3 pl, float box, out vec2 rawBound) {
     rawBound = vec2(0.0);
     const uvec4 info = sdfObjects[o].info;
