@@ -375,7 +375,8 @@ TEST_P(SdfWorldCacheTest, MemoryFollowsTheScene) {
 // two fields side by side, each named somewhere and never where another object is nearer; a
 // smooth union (its value is only a lower bound) is never named, an exact sphere is; distances
 // stay conservative. The smooth union's reference distance is its program value, a lower bound:
-// the checks against it are stricter than against its true distance.
+// the checks against it are stricter than against its true distance. Checked with the tests'
+// cache and with level-0 voxels of 1/256 to 1/64.
 TEST_P(SdfWorldCacheTest, FieldsAreNamedWhereCertainInexactProgramsNever) {
     CacheScene s;
     s.world.get<ecs::Transform>(s.camera)->position = {0.0f, 0.8f, 1.0f};  // level 0 (4 units) holds them
@@ -392,6 +393,19 @@ TEST_P(SdfWorldCacheTest, FieldsAreNamedWhereCertainInexactProgramsNever) {
     std::string error;
     ASSERT_TRUE(r.readWorldCache(c, error)) << error;
     expectConservative(c, s.refs(), "fields + smooth union", 100);  // no named object farther than another
+    // The same with finer caches, where the certainty margin sqrt(3) h + 2 s shrinks to 0.009
+    // units at h = 1/256 (every level's points sampled).
+    for (float h0 : {1.0f / 256.0f, 1.0f / 128.0f, 1.0f / 64.0f}) {
+        SceneRenderer rf(dev());
+        scene::AccelerationSettings a = accel();
+        a.cacheVoxel = h0;
+        a.cacheLevels = 6;
+        a.cacheResolution = 64;
+        s.render(rf, a);
+        WorldCacheReadback cf;
+        ASSERT_TRUE(rf.readWorldCache(cf, error)) << error;
+        expectConservative(cf, s.refs(), "fields, fine cache", 100);
+    }
     size_t fieldA = 0, fieldB = 0, smooth = 0, sphere = 0;
     for (uint32_t id : c.ids) {
         if (id >= c.objectKeys.size()) continue;
