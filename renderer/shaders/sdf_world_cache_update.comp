@@ -48,12 +48,13 @@ const uint kModeSplat = 1u;
 
 const uint kExactProgram = 1u;  // CacheObjectFlags: the shape program's value is exact
 
-// An upper bound of the object's true signed world distance at c, given its value d there (the
-// lower bound sdfObjectDistance); 3e38 when none is known. Exact programs (flag): the local value
+// An upper bound of the object's true signed world distance at c (local position pl), given its
+// value d there (the lower bound objectLowerBound) and, for a field, its raw value and
+// interpolation bound there; 3e38 when none is known. Exact programs (flag): the local value
 // d / sigma_min is the true local distance. World from local: outside (> 0) at most sigma_max
 // times, inside at most sigma_min times (a negative value), sigma_max^2 <= the largest Gershgorin
 // row sum of M^T M.
-float upperDistance(uint o, vec3 c, float d, vec2 rawBound) {
+float upperDistance(uint o, vec3 c, vec3 pl, float d, vec2 rawBound) {
     const mat3 m = mat3(sdfObjects[o].model);
     const mat3 g = transpose(m) * m;
     float rowMax = 0.0;
@@ -76,7 +77,7 @@ float upperDistance(uint o, vec3 c, float d, vec2 rawBound) {
         // which sigma_min converts: the step is sigma_min times the local value, and a local point
         // moves at most 1 / sigma_min times the world offset).
         const SdfField f = sdfFields[sdfObjects[o].info.y];
-        const vec3 x = sdfFieldVoxelCoord(f, sdfToLocal(o, c));
+        const vec3 x = sdfFieldVoxelCoord(f, pl);
         if (any(lessThan(x, vec3(0.0))) || any(greaterThan(x, f.dims.xyz - 1.0))) return 3.0e38;
         const float raw = rawBound.x, bound = rawBound.y;  // objectLowerBound's
         const float margin = (0.8660254 + sdfFieldHardwareTerm(f)) * f.origin.w;
@@ -127,6 +128,7 @@ void main() {
     float d1 = truncation, d2 = truncation;
     uint nearest = SDF_CACHE_NONE;
     vec2 nearestRawBound = vec2(0.0);
+    vec3 nearestLocal = vec3(0.0);
     for (uint k = 0u; k < job.list.y; ++k) {
         const uint o = cacheObjectList[job.list.x + k];
         if (o >= pc.jobs.y) continue;
@@ -145,6 +147,7 @@ void main() {
             d1 = d;
             nearest = o;
             nearestRawBound = rawBound;
+            nearestLocal = pl;
         } else {
             d2 = min(d2, d);
         }
@@ -162,7 +165,8 @@ void main() {
     // lower bound of one distance), so a gap below d_1 needs no U.
     uint id = nearest;
     const float gap = d2 - 1.7320509 * h - 2.0 * slack;
-    if (nearest != SDF_CACHE_NONE && !(gap >= d1 && gap >= upperDistance(nearest, c, d1, nearestRawBound)))
+    if (nearest != SDF_CACHE_NONE &&
+        !(gap >= d1 && gap >= upperDistance(nearest, c, nearestLocal, d1, nearestRawBound)))
         id = SDF_CACHE_UNCERTAIN;
     imageStore(cacheDistanceImage, t, vec4(d1 - margin));
     imageStore(cacheIdImage, t, uvec4(id));
