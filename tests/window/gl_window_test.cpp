@@ -31,8 +31,8 @@ class GlWindowTest : public testing::Test {
 protected:
     void SetUp() override {
         if (!openGLSelected()) GTEST_SKIP() << "OpenGL not selected (--backend)";
+        // GLFW stays initialised for the rest of the process (renderer_window_test.cpp).
         if (!glfwInit()) GTEST_SKIP() << "glfwInit failed: no display (run under xvfb-run)";
-        m_glfw = true;
         glfwDefaultWindowHints();
         glfwWindowHint(GLFW_CLIENT_API, GLFW_OPENGL_API);
         glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
@@ -68,7 +68,6 @@ protected:
         }
         m_device.reset();
         if (m_window) glfwDestroyWindow(m_window);
-        if (m_glfw) glfwTerminate();
         if (m_log) {
             EXPECT_TRUE(m_log->errors.empty())
                 << m_log->errors.size()
@@ -130,7 +129,6 @@ protected:
         glfwPollEvents();
     }
 
-    bool m_glfw = false;
     GLFWwindow* m_window = nullptr;
     std::shared_ptr<penumbra::test::LogCapture> m_log;
     std::unique_ptr<rhi::Device> m_device;

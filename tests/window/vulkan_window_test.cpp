@@ -23,12 +23,11 @@ namespace {
 
 using penumbra::test::LogCapture;
 
+// GLFW stays initialised for the rest of the process (renderer_window_test.cpp).
 struct GlfwWindow {
     GLFWwindow* window = nullptr;
-    bool initialised = false;
     ~GlfwWindow() {
         if (window) glfwDestroyWindow(window);
-        if (initialised) glfwTerminate();
     }
 };
 
@@ -38,7 +37,6 @@ bool openWindow(GlfwWindow& w, int width, int height) {
         ADD_FAILURE() << "glfwInit failed (no X display? run under xvfb-run)";
         return false;
     }
-    w.initialised = true;
     if (!glfwVulkanSupported()) {
         ADD_FAILURE() << "GLFW finds no Vulkan loader";
         return false;
