@@ -80,17 +80,15 @@ float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out fl
     return uncapped;
 }
 
-// Distance to the nearest object at world point p; `nearest` is its object, `second` a lower bound
-// of the other objects' distances. `only` (the id field's object for p's cell, the hit decision's
-// object, else 0xffffffff) is evaluated alone; for the id field it is the nearest object everywhere
-// around p and bounds the others too. With culling, objects whose box the ray had left before
+// The march's distance to the nearest object at world point p (safe distances: fields with their
+// safety bound and rootBound); `nearest` is its object, `second` a lower bound of the other
+// objects' distances. `only` (the id field's object for p's cell, else 0xffffffff) is evaluated
+// alone: it is the nearest object everywhere around p and bounds the others too. With culling, objects whose box the ray had left before
 // `tFrom` (the point the last step started from) are skipped: the step from tFrom to here may have
 // crossed a box the current point is already past, and the over-relaxation check needs every
 // surface near that segment; an object whose box is farther than the best distance so far is not
-// evaluated. Without culling every traced object is evaluated. This is the march's one evaluation
-// site (sdfMarch): the march's steps and the hit decision's searches both call it.
-float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound, out uint nearest,
-                    out float second) {
+// evaluated. Without culling every traced object is evaluated.
+float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
@@ -112,7 +110,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound
         }
         ++g_evaluations;
         float ui, ri;
-        float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, rootBound, ui, ri);
+        float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, true, ui, ri);
         if (di < d || one) {
             second = d;
             d = di;
@@ -160,12 +158,10 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, bool rootBound
 // steps on a field are bounded by the distance to the interpolant's zero set as well
 // (marchLocalDistance), so that no step passes a part of it before a search starts.
 //
-// The search is a resumable state machine rather than a loop of its own: rootNext says where to
-// evaluate next (or that the search is over), the march's one evaluation site evaluates there, and
-// rootTake takes the value. A CPU device runs a SIMD group's lanes in lock step and every loop and
-// branch while any lane needs it, so a search nested in the march loop made the whole group wait,
-// at every step where one lane searched, for the longest search of any lane; as states of one loop,
-// the lanes' marches and searches overlap (sdfMarch).
+// The search is a resumable state machine: rootNext says where to evaluate next (or that the
+// search is over), the decision loop of sdfMarch evaluates the object there (objectRawDistance) or
+// walks a cell (cellStep), and rootTake takes the value; one loop drives the searches of every
+// candidate of a decision in turn.
 struct RootSearch {
     uint obj;
     float t0, gate, tEnd, tol, eps;
@@ -510,18 +506,31 @@ void keepBestCandidate(float err, float t, uint object, inout float bestError, i
     }
 }
 
+// An object's raw distance at world point p (an interpolated field without its safety bound: the
+// hit decision's value: marchLocalDistance with safety 0 and no rootBound).
+float objectRawDistance(uint obj, vec3 p) {
+    ++g_evaluations;
+    float u, r;
+    return sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, sdfToLocal(obj, p), 0.0, false, u, r);
+}
+
 // The march along the ray ro + t rd (rd unit) from t (the first box entry, at least tMin) to tMax
 // with at most stepLimit object steps, over the candidates set up by the caller (g_list / g_count /
 // g_overflow / the tile list, or every traced object without CULL). Returns whether it hit; then t
 // is the hit's ray parameter and hitObject its object. steps counts the steps that evaluated
 // objects (sdf_trace.comp, steps 3-5).
 //
-// One loop with one evaluation site (sceneDistance): each iteration a ray either advances its hit
-// decision to its next evaluation (or to its end: a hit, or a near miss and the march goes on) or,
-// marching, looks up the world cache for its point; then it evaluates what it needs there (the
-// march's candidates, or the decision's one object), and takes the value. The lanes of a SIMD
-// group that decide and the lanes that march share the iterations (Aila and Laine's "if-if" form
-// of a GPU traversal loop), instead of the whole group waiting for every search of every lane.
+// Rounds of two loops: the march steps until its point is a hit candidate (or the ray ends), then
+// the hit decision runs its searches to their end (a hit, or a near miss and the next round
+// marches on). On a CPU device a SIMD group runs each loop until its last lane leaves it, so the
+// lanes that reach a candidate wait for the others and decide together, and each loop's body
+// holds only its own code: the decision evaluates one object (objectRawDistance) or walks a
+// field's cells, never the march's candidate loop. One loop whose iterations either marched or
+// took one search step (Aila and Laine's "if-if" form) let the lanes' marches and searches
+// overlap, but every iteration ran both bodies: the two loops are 6-18 % faster with culling
+// (docs/BENCHMARKS.md), where a march step is cheap; without culling, where every march step
+// evaluates every object and the rounds add march iterations, a few per cent slower. Both give
+// the same decisions and steps, so the same picture.
 bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout float t, out uint hitObject,
               inout uint steps) {
     float safety = trace.epsilons.w;
@@ -538,115 +547,29 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     // surface are the uncertain ones. Skipping only moves the march's samples (the objects are
     // evaluated instead), never the picture.
     float cacheQuiet = 0.0;
-    bool listNext = false;  // evaluate the candidates here, no cache (the id field's object was near)
     float bestError = 3.0e38, bestT = t;
     uint bestObject = 0xffffffffu;
-    // The hit decision in progress (deciding): at the march point t, where the safe distance d of
-    // object `nearest` fell below eps (second: the others' lower bound), the first root along the
-    // ray of that object, then of every candidate (index decision) whose distance here is below
-    // the gap to the best root so far (below eps while there is none): the earliest root is the
-    // hit, on its object; none is a near miss and the march goes on.
-    bool deciding = false;
-    int decision = -1, decisionCount = 0;
-    float dD = 0.0, dSecond = 0.0, dEps = 0.0, dRaw = 0.0, dNearPast = 0.0, dBest = 3.0e38, dTol = 0.0;
-    uint dNearest = 0xffffffffu, dRoot = 0xffffffffu;
-    bool dInside = false;
-    RootSearch search;  // set by rootStart when a decision starts
     for (;;) {
-        bool evaluate = false;
-        uint only = 0xffffffffu;  // the one object to evaluate (the id field's, the search's)
-        float evalSafety = safety;
-        vec3 q = ro + rd * t;
-        float tFrom = min(prevT, t);
-        // (a) The hit decision: its next evaluation, or its end.
-        if (deciding) {
-            for (;;) {
-                if (rootNext(search, steps, stepLimit)) {
-                    evaluate = true;
-                    only = search.obj;
-                    evalSafety = 0.0;
-                    q = ro + rd * search.tr;
-                    break;
-                }
-                // The search of `decision` is over.
-                float tj = search.result;
-                if (search.cells)  // the walk's nearest point, for the step-limit rule
-                    keepBestCandidate(search.sb, search.tp, search.obj, bestError, bestT, bestObject);
-                if (decision < 0) {
-                    // The candidate's object (its raw distance: for a field evaluated by the
-                    // search, for a shape the step's own; not below eps: no candidate, below zero:
-                    // inside).
-                    dRaw = search.sFirst;
-                    dNearPast = search.tPast;
-                    dInside = dRaw <= 0.0;
-                    if (dInside || dRaw >= dEps) {
-                        deciding = false;
-                        break;
-                    }
-                }
-                if (tj >= 0.0 && tj < dBest) {
-                    dBest = tj;
-                    dRoot = search.obj;
-                }
-                // The next candidate that could be crossed before the best root so far.
-                bool started = false;
-                for (++decision; decision < decisionCount; ++decision) {
-                    if (trace.counts.w == 0u || steps >= stepLimit) break;
-                    uint obj = candidateObject(uint(decision), t);
-                    if (obj == dNearest || obj == 0xffffffffu) continue;
-                    float gap = dRoot != 0xffffffffu ? dBest - t : dEps;
-                    if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
-                    rootStart(search, obj, ro, rd, t, dD, false, gap, min(dBest, tMax), dTol, dEps, true);
-                    started = true;
-                    break;
-                }
-                if (!started) {
-                    deciding = false;
-                    break;
-                }
-            }
-            if (!deciding) {
-                if (dInside) {
-                    // Inside the solid (a ray that starts inside, e.g. a camera in an object or
-                    // behind the near plane's cut): a hit where it is.
-                    hit = true;
-                    hitObject = dNearest;
-                    break;
-                }
-                if (dRoot != 0xffffffffu) {
-                    hit = true;
-                    hitObject = dRoot;
-                    t = max(dBest, tMin);
-                    break;
-                }
-                // Not on the surface (yet): a plain step on the raw value (never past the other
-                // objects' safe distance), without over-relaxation from here on. A near miss stays
-                // the best candidate for the step-limit rule (a ray stuck in a gap narrower than
-                // the hit epsilon then hits where it entered it instead of showing a hole).
-                keepBestCandidate(dRaw / max(t, 1e-6), t, dNearest, bestError, bestT, bestObject);
-                omega = 1.0;
-                prevRadius = 0.0;
-                stepLength = 0.0;
-                prevT = t;
-                // Past the nearest object's closest approach in one step when the hit decision
-                // found where its distance grows again (no root before there), else its distance;
-                // never past the other objects' safe distance, at least half an eps.
-                t += max(min(max(dRaw, dNearPast - t), dSecond), 0.5 * dEps);
-                q = ro + rd * t;
-                tFrom = min(prevT, t);
-            }
-        }
-        // (b) The march: the world cache for its point. Far from every surface a plain step of its
-        // distance with no object evaluated; near one, with the id field, only the object it names.
-        float eps = 0.0, cached = 0.0;
-        bool cacheStep = false;
-        if (!deciding) {
+        // (a) The march, to a hit candidate: where the safe distance d of object `nearest` falls
+        // below eps (second: the others' lower bound).
+        bool candidate = false;
+        bool listNext = false;  // evaluate the candidates here, no cache (the id field's object was near)
+        float d = 0.0, second = 0.0, eps = 0.0;
+        uint nearest = 0xffffffffu;
+        for (;;) {
             if (!(steps < stepLimit && t <= tMax)) break;
+            vec3 q = ro + rd * t;
+            float tFrom = min(prevT, t);
             vec3 pa = abs(q);
             // At least a few float ulps of the point's coordinates (scenes far from the origin)
             // and of the distance travelled.
             eps = max(trace.epsilons.x * footprint * t, max(1e-6 * t, 4.8e-7 * max(max(pa.x, pa.y), pa.z)));
+            uint only = 0xffffffffu;  // the id field's object
+            float cached = 0.0;
+            bool cacheStep = false;
 #ifndef SDF_MARCH_NO_CACHE
+            // The world cache for the point. Far from every surface a plain step of its distance
+            // with no object evaluated; near one, with the id field, only the object it names.
             float cacheVoxel;
             uint cacheObject;
             bool lookup = !listNext && !(prevRadius < 2.0 * cacheQuiet);
@@ -664,94 +587,147 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 cacheQuiet = cacheStep || only != 0xffffffffu ? 0.0 : cacheVoxel;
             }
 #endif
-            evaluate = !cacheStep;
             listNext = false;
+            // The march's evaluation: its candidates at q (the id field's object alone).
+            nearest = 0xffffffffu;
+            second = cached;
+            d = cached;
+            if (!cacheStep) d = sceneDistance(q, tFrom, safety, only, nearest, second);
+            if (only != 0xffffffffu && d < eps) {
+                // The id field's object is a hit candidate: the hit decision starts from every
+                // candidate's distance here, as without the id field (its near-miss step stays
+                // within the others' safe distance, which the one evaluation does not give). The
+                // next iteration evaluates them at the same point.
+                listNext = true;
+                continue;
+            }
+            float radius = abs(d);
+            if (omega > 1.0 && radius + prevRadius < stepLength) {
+                // The spheres do not overlap: the over-relaxed step may have skipped a surface.
+                // Back to the previous point, plain step from there, no more over-relaxation.
+                t = prevT + prevRadius;
+                stepLength = prevRadius;
+                omega = 1.0;
+                prevT = t;
+                ++steps;
+                continue;
+            }
+            if (cacheStep) {
+                // A plain safe step (the cached value bounds every object's distance from below;
+                // as the previous radius it keeps the next over-relaxation check conservative).
+                ++cacheSteps;
+                prevRadius = d;
+                prevT = t;
+                stepLength = d;
+                t += d;
+                continue;
+            }
+            if (d < eps) {
+                // Within eps of a surface by the safe distance: the hit decision. This step counts
+                // here, with the decision's evaluations after it, each within the step limit.
+                ++steps;
+                candidate = true;
+                break;
+            }
+            keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
+            prevRadius = radius;
+            prevT = t;
+            stepLength = omega * d;
+            t += stepLength;
+            ++steps;
+            if (t > tMax && stepLength > radius) {
+                // An over-relaxed step past the ray's end (the far plane, or a mesh's depth just
+                // behind a surface) is never checked by the spheres' overlap: the plain step
+                // instead, and no more over-relaxation.
+                t = prevT + radius;
+                stepLength = radius;
+                omega = 1.0;
+            }
         }
+        if (!candidate) break;
+
+        // (b) The hit decision at the march point t: the first root along the ray of the
+        // candidate's object `nearest`, then of every candidate (index decision) whose distance
+        // here is below the gap to the best root so far (below eps while there is none): the
+        // earliest root is the hit, on its object; none is a near miss and the march goes on. A
+        // field's safe distance lies up to its interpolation bound below the interpolated one, so
+        // the raw value decides; the candidate's raw value here is known from the step's
+        // evaluation (the same value the search's own first evaluation would take).
+        int decision = -1;
+        int decisionCount = int(candidateCount());
+        float dRaw = d, dNearPast = t, dBest = 3.0e38;
+        float dTol = max(kRootTolerance * eps, 1e-6 * t);
+        uint dRoot = 0xffffffffu;
+        bool dInside = false;
+        RootSearch search;
+        rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
+        for (;;) {
+            if (rootNext(search, steps, stepLimit)) {
 #ifdef SDF_FIELDS
-        if (deciding && evaluate && search.cells && search.r >= 0) {
-            cellStep(search, ro, rd, steps);  // a field's search walks its cells (stored values, no filter)
-            continue;
-        }
+                if (search.cells && search.r >= 0) {
+                    cellStep(search, ro, rd, steps);  // a field's search walks its cells (stored values, no filter)
+                    continue;
+                }
 #endif
-        // (c) The one evaluation site.
-        uint nearest = 0xffffffffu;
-        float second = cached;
-        float d = cached;
-        if (evaluate) d = sceneDistance(q, tFrom, evalSafety, only, !deciding, nearest, second);
-        if (!deciding && only != 0xffffffffu && d < eps) {
-            // The id field's object is a hit candidate: the hit decision starts from every
-            // candidate's distance here, as without the id field (its near-miss step stays within
-            // the others' safe distance, which the one evaluation does not give). The next
-            // iteration evaluates them at the same point (one evaluation site: a CPU device would
-            // otherwise keep a second copy of the loop's largest part live).
-            listNext = true;
-            continue;
+                rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
+                continue;
+            }
+            // The search of `decision` is over.
+            float tj = search.result;
+            if (search.cells)  // the walk's nearest point, for the step-limit rule
+                keepBestCandidate(search.sb, search.tp, search.obj, bestError, bestT, bestObject);
+            if (decision < 0) {
+                // The candidate's object (its raw distance: for a field evaluated by the search,
+                // for a shape the step's own; not below eps: no candidate, below zero: inside).
+                dRaw = search.sFirst;
+                dNearPast = search.tPast;
+                dInside = dRaw <= 0.0;
+                if (dInside || dRaw >= eps) break;
+            }
+            if (tj >= 0.0 && tj < dBest) {
+                dBest = tj;
+                dRoot = search.obj;
+            }
+            // The next candidate that could be crossed before the best root so far.
+            bool started = false;
+            for (++decision; decision < decisionCount; ++decision) {
+                if (trace.counts.w == 0u || steps >= stepLimit) break;
+                uint obj = candidateObject(uint(decision), t);
+                if (obj == nearest || obj == 0xffffffffu) continue;
+                float gap = dRoot != 0xffffffffu ? dBest - t : eps;
+                if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
+                rootStart(search, obj, ro, rd, t, d, false, gap, min(dBest, tMax), dTol, eps, true);
+                started = true;
+                break;
+            }
+            if (!started) break;
         }
-        // (d) Take the value.
-        if (deciding) {
-            rootTake(search, d, steps);
-            continue;
+        if (dInside) {
+            // Inside the solid (a ray that starts inside, e.g. a camera in an object or behind
+            // the near plane's cut): a hit where it is.
+            hit = true;
+            hitObject = nearest;
+            break;
         }
-        float radius = abs(d);
-        if (omega > 1.0 && radius + prevRadius < stepLength) {
-            // The spheres do not overlap: the over-relaxed step may have skipped a surface.
-            // Back to the previous point, plain step from there, no more over-relaxation.
-            t = prevT + prevRadius;
-            stepLength = prevRadius;
-            omega = 1.0;
-            prevT = t;
-            ++steps;
-            continue;
+        if (dRoot != 0xffffffffu) {
+            hit = true;
+            hitObject = dRoot;
+            t = max(dBest, tMin);
+            break;
         }
-        if (cacheStep) {
-            // A plain safe step (the cached value bounds every object's distance from below;
-            // as the previous radius it keeps the next over-relaxation check conservative).
-            ++cacheSteps;
-            prevRadius = d;
-            prevT = t;
-            stepLength = d;
-            t += d;
-            continue;
-        }
-        if (d < eps) {
-            // Within eps of a surface by the safe distance. A field's safe distance lies up to
-            // its interpolation bound below the interpolated one, so the raw value decides: the
-            // hit decision starts with the candidate's object (whose search knows its raw value
-            // unless a field's safety bound was subtracted). This step counts here, with the
-            // decision's evaluations after it, each within the step limit.
-            ++steps;
-            deciding = true;
-            decision = -1;
-            decisionCount = int(candidateCount());
-            dD = d;
-            dSecond = second;
-            dEps = eps;
-            dNearest = nearest;
-            dRaw = d;
-            dNearPast = t;
-            dBest = 3.0e38;
-            dRoot = 0xffffffffu;
-            dInside = false;
-            dTol = max(kRootTolerance * eps, 1e-6 * t);
-            // The candidate's raw value here is known from this step's evaluation (the same value
-            // the search's own first evaluation would take).
-            rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
-            continue;
-        }
-        keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
-        prevRadius = radius;
+        // Not on the surface (yet): a plain step on the raw value (never past the other objects'
+        // safe distance), without over-relaxation from here on. A near miss stays the best
+        // candidate for the step-limit rule (a ray stuck in a gap narrower than the hit epsilon
+        // then hits where it entered it instead of showing a hole).
+        keepBestCandidate(dRaw / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
+        omega = 1.0;
+        prevRadius = 0.0;
+        stepLength = 0.0;
         prevT = t;
-        stepLength = omega * d;
-        t += stepLength;
-        ++steps;
-        if (t > tMax && stepLength > radius) {
-            // An over-relaxed step past the ray's end (the far plane, or a mesh's depth just
-            // behind a surface) is never checked by the spheres' overlap: the plain step instead,
-            // and no more over-relaxation.
-            t = prevT + radius;
-            stepLength = radius;
-            omega = 1.0;
-        }
+        // Past the nearest object's closest approach in one step when the hit decision found
+        // where its distance grows again (no root before there), else its distance; never past
+        // the other objects' safe distance, at least half an eps.
+        t += max(min(max(dRaw, dNearPast - t), second), 0.5 * eps);
     }
     if (!hit && steps >= stepLimit && bestObject != 0xffffffffu &&
         bestError <= 4.0 * trace.epsilons.x * footprint && bestT <= tMax) {
