@@ -160,8 +160,8 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 //
 // The search is a resumable state machine: rootNext says where to evaluate next (or that the
 // search is over), the decision loop of sdfMarch evaluates the object there (objectRawDistance) or
-// walks a cell (cellStep), and rootTake takes the value; one loop drives the searches of every
-// candidate of a decision in turn.
+// walks a cell (cellStep), and rootTake takes the value; each candidate's search runs in a loop of
+// its own (a field's walk in one that holds only cellStep), and the decision starts them in turn.
 struct RootSearch {
     uint obj;
     float t0, gate, tEnd, tol, eps;
@@ -662,16 +662,18 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         RootSearch search;
         rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
         for (;;) {
-            if (rootNext(search, steps, stepLimit)) {
+            // One candidate's search, to its end.
 #ifdef SDF_FIELDS
-                if (search.cells && search.r >= 0) {
-                    cellStep(search, ro, rd, steps);  // a field's search walks its cells (stored values, no filter)
-                    continue;
-                }
+            if (search.cells) {
+                // A field's search walks its cells (stored values, no filter) after its first
+                // value (when not known).
+                if (search.r < 0 && rootNext(search, steps, stepLimit))
+                    rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
+                while (rootNext(search, steps, stepLimit)) cellStep(search, ro, rd, steps);
+            } else
 #endif
-                rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
-                continue;
-            }
+                while (rootNext(search, steps, stepLimit))
+                    rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
             // The search of `decision` is over.
             float tj = search.result;
             if (search.cells)  // the walk's nearest point, for the step-limit rule
