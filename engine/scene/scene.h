@@ -165,7 +165,7 @@ struct AccelerationSettings {
     uint32_t cacheLevels = 4;           // clipmap levels (each twice the voxel size of the last)
     uint32_t cacheResolution = 64;      // voxels per side of each level (multiple of 8)
     float cacheVoxel = 0.0f;            // level-0 voxel size in world units; 0: from the scene's size
-    uint32_t cacheBudgetVoxels = 4096;  // dirty-region voxels recomputed per frame (rest queued)
+    uint32_t cacheBudgetVoxels = 2048;  // dirty-region voxels recomputed per frame (rest queued)
 };
 
 // Motion blur from the velocity buffer (renderer/features/motion_blur.h): each pixel gathers

@@ -81,7 +81,7 @@ struct ClipmapSettings {
     uint32_t levels = 4;
     uint32_t resolution = 64;  // rounded down to a multiple of 8 (at least 8)
     float voxel = 0.0f;        // h_0; 0: from the scene
-    uint32_t budgetVoxels = 4096;  // scene::AccelerationSettings::cacheBudgetVoxels
+    uint32_t budgetVoxels = 2048;  // scene::AccelerationSettings::cacheBudgetVoxels
 };
 
 enum class CacheJobMode : uint32_t { Recompute = 0, Splat = 1 };
