@@ -506,6 +506,24 @@ void keepBestCandidate(float err, float t, uint object, inout float bestError, i
     }
 }
 
+// A near miss of object `nearest` at the march point t (raw: its raw distance there, not below
+// zero; past: a point it has no root before, t when unknown; second: the other objects' lower
+// bound): a plain step on the raw value, past the object's closest approach in one step when the
+// hit decision found where its distance grows again, never past the others' safe distance, at
+// least half an eps; no over-relaxation from here on. A near miss stays the best candidate for
+// the step-limit rule (a ray stuck in a gap narrower than the hit epsilon then hits where it
+// entered it instead of showing a hole).
+void nearMissStep(uint nearest, float raw, float past, float second, float eps, inout float t,
+                  inout float omega, inout float prevRadius, inout float stepLength, inout float prevT,
+                  inout float bestError, inout float bestT, inout uint bestObject) {
+    keepBestCandidate(raw / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
+    omega = 1.0;
+    prevRadius = 0.0;
+    stepLength = 0.0;
+    prevT = t;
+    t += max(min(max(raw, past - t), second), 0.5 * eps);
+}
+
 // An object's raw distance at world point p (an interpolated field without its safety bound: the
 // hit decision's value: marchLocalDistance with safety 0 and no rootBound).
 float objectRawDistance(uint obj, vec3 p) {
@@ -630,22 +648,19 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 // Within eps of a surface by the safe distance: the hit decision. This step counts
                 // here, with the decision's evaluations after it, each within the step limit.
                 ++steps;
+                // The decision's first checks of the candidate's raw value (rootNext's gate and
+                // tolerance), taken here so that the ray goes on or ends without a round.
                 if (g_nearestRaw >= eps) {
                     // No candidate: a field whose safe distance lies below eps by its
-                    // interpolation bound while its raw value does not. The decision would stop at
-                    // its first check (rootNext's gate) and take the near-miss step below; taken
-                    // here, the ray goes on in this loop instead of waiting for a round.
-                    keepBestCandidate(g_nearestRaw / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
-                    omega = 1.0;
-                    prevRadius = 0.0;
-                    stepLength = 0.0;
-                    prevT = t;
-                    t += max(min(g_nearestRaw, second), 0.5 * eps);
+                    // interpolation bound while its raw value does not.
+                    nearMissStep(nearest, g_nearestRaw, t, second, eps, t, omega, prevRadius, stepLength,
+                                 prevT, bestError, bestT, bestObject);
                     continue;
                 }
                 if (g_nearestRaw <= max(kRootTolerance * eps, 1e-6 * t)) {
-                    // On the surface, or inside: the decision's first check makes it the hit here
-                    // (no other candidate can be crossed before it).
+                    // On the surface, or inside the solid (a ray that starts inside, e.g. a camera
+                    // in an object or behind the near plane's cut): a hit where it is (no other
+                    // candidate can be crossed before it).
                     hit = true;
                     hitObject = nearest;
                     break;
@@ -679,10 +694,9 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         // evaluation (the same value the search's own first evaluation would take).
         int decision = -1;
         int decisionCount = int(candidateCount());
-        float dRaw = d, dNearPast = t, dBest = 3.0e38;
+        float dRaw = g_nearestRaw, dNearPast = t, dBest = 3.0e38;
         float dTol = max(kRootTolerance * eps, 1e-6 * t);
         uint dRoot = 0xffffffffu;
-        bool dInside = false;
         RootSearch search;
         rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
         for (;;) {
@@ -702,14 +716,9 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             float tj = search.result;
             if (search.cells)  // the walk's nearest point, for the step-limit rule
                 keepBestCandidate(search.sb, search.tp, search.obj, bestError, bestT, bestObject);
-            if (decision < 0) {
-                // The candidate's object (its raw distance: for a field evaluated by the search,
-                // for a shape the step's own; not below eps: no candidate, below zero: inside).
-                dRaw = search.sFirst;
-                dNearPast = search.tPast;
-                dInside = dRaw <= 0.0;
-                if (dInside || dRaw >= eps) break;
-            }
+            // The candidate's object: where it certainly has no root before (its raw value here,
+            // between the root tolerance and eps, was checked in the march loop).
+            if (decision < 0) dNearPast = search.tPast;
             if (tj >= 0.0 && tj < dBest) {
                 dBest = tj;
                 dRoot = search.obj;
@@ -728,32 +737,15 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             }
             if (!started) break;
         }
-        if (dInside) {
-            // Inside the solid (a ray that starts inside, e.g. a camera in an object or behind
-            // the near plane's cut): a hit where it is.
-            hit = true;
-            hitObject = nearest;
-            break;
-        }
         if (dRoot != 0xffffffffu) {
             hit = true;
             hitObject = dRoot;
             t = max(dBest, tMin);
             break;
         }
-        // Not on the surface (yet): a plain step on the raw value (never past the other objects'
-        // safe distance), without over-relaxation from here on. A near miss stays the best
-        // candidate for the step-limit rule (a ray stuck in a gap narrower than the hit epsilon
-        // then hits where it entered it instead of showing a hole).
-        keepBestCandidate(dRaw / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
-        omega = 1.0;
-        prevRadius = 0.0;
-        stepLength = 0.0;
-        prevT = t;
-        // Past the nearest object's closest approach in one step when the hit decision found
-        // where its distance grows again (no root before there), else its distance; never past
-        // the other objects' safe distance, at least half an eps.
-        t += max(min(max(dRaw, dNearPast - t), second), 0.5 * eps);
+        // Not on the surface (yet).
+        nearMissStep(nearest, dRaw, dNearPast, second, eps, t, omega, prevRadius, stepLength, prevT,
+                     bestError, bestT, bestObject);
     }
     if (!hit && steps >= stepLimit && bestObject != 0xffffffffu &&
         bestError <= 4.0 * trace.epsilons.x * footprint && bestT <= tMax) {
