@@ -584,7 +584,9 @@ void GlCommandList::writeTimestamp(QueryPoolHandle pool, uint32_t index) {
         return;
     }
     m_commands.push_back([obj = *p, index](GlDevice& d) {
+        if (d.m_flushTimestamps) d.m_gl.Flush();
         d.m_gl.QueryCounter(obj->queries[index], GL_TIMESTAMP);
+        if (d.m_flushTimestamps) d.m_gl.Flush();
         obj->written[index] = 1;
     });
 }

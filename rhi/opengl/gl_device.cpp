@@ -215,6 +215,7 @@ bool GlDevice::initialize() {
     m_info.backend = Backend::OpenGL;
     m_info.apiVersion = "OpenGL " + version;
     m_info.deviceName = str(GL_RENDERER);
+    m_flushTimestamps = m_info.deviceName.find("llvmpipe") != std::string::npos;
     m_info.driverName = str(GL_VENDOR);
     // "4.5 (Core Profile) Mesa 22.3.6" -> "Mesa 22.3.6"
     std::string driverVersion = version;

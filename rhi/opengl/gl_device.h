@@ -253,6 +253,11 @@ private:
     GLint m_ssboAlignment = 256;
     GLint m_maxLabelLength = 256;
     bool m_muteDebug = false;
+    // llvmpipe takes a timestamp when it rasterizes the queued scene, not where the query stands
+    // among compute dispatches (which run at once): without a flush before and after each
+    // timestamp, a compute pass's time can be charged to another pass (penumbra bench objects on
+    // OpenGL: sdf_ao read 0 ms and sdf_shadow carried its time).
+    bool m_flushTimestamps = false;
     bool m_lost = false;
 
     detail::HandlePool<BufferTag, std::unique_ptr<BufferObj>> m_buffers;

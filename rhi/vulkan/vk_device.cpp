@@ -425,6 +425,7 @@ bool VulkanDevice::createLogicalDevice() {
     m_separateDepthLayouts = f12.separateDepthStencilLayouts;
     m_independentBlend = a.independentBlend;
     m_multiDrawIndirect = a.multiDrawIndirect;
+    m_barriersAroundTimestamps = std::string(m_props.deviceName).find("llvmpipe") != std::string::npos;
 
     uint32_t extCount = 0;
     vkEnumerateDeviceExtensionProperties(m_physical, nullptr, &extCount, nullptr);

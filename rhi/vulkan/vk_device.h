@@ -305,6 +305,10 @@ private:
     bool m_separateDepthLayouts = false;
     bool m_independentBlend = false;
     bool m_multiDrawIndirect = false;
+    // lavapipe takes a timestamp when its gallium context next flushes, which a pipeline barrier
+    // does: without barriers around each timestamp, a dispatch's time can be charged to the
+    // interval before it (VulkanCommandList::writeTimestamp).
+    bool m_barriersAroundTimestamps = false;
 
     PFN_vkCreateDebugUtilsMessengerEXT m_vkCreateDebugUtilsMessenger = nullptr;
     PFN_vkDestroyDebugUtilsMessengerEXT m_vkDestroyDebugUtilsMessenger = nullptr;

@@ -213,6 +213,65 @@ TEST_P(ConformanceQueries, TimestampsIncrease) {
                 double(ns[kStamps - 1] - ns[0]) * 1e-6);
 }
 
+// Each dispatch's time lies between the timestamps written around it: after a render pass, three
+// equal dispatches, one per interval, each interval holding a share of the whole (llvmpipe's OpenGL
+// took a timestamp when it next rasterized its queued scene, so compute passes read 0 ms and a
+// later pass carried their time; the GL backend flushes after each timestamp there).
+TEST_P(ConformanceQueries, TimestampsBracketTheirDispatches) {
+    ASSERT_TRUE(dev().info().limits.timestamps) << "timestamp queries are expected on both backends";
+    constexpr uint32_t kElements = 16384;
+    constexpr uint32_t kDispatches = 3;
+    BufferHandle data = makeBuffer(kElements * 4, BufferUsage::Storage | BufferUsage::CopyDst);
+    PipelineHandle pipeline = makeComputePipeline(penumbra::shaders::conf_busy::compute());
+    QueryPoolHandle pool = makeQueryPool(kDispatches + 1);
+    ASSERT_TRUE(data.isValid() && pipeline.isValid() && pool.isValid());
+    BindGroupHandle group = makeBindGroup(pipeline, 0, {BindGroupEntry::makeBuffer(0, data)});
+    ASSERT_TRUE(group.isValid());
+    const uint32_t iterations = 256;
+    const Access rw = Access::ShaderRead | Access::ShaderWrite;
+
+    TextureHandle target = makeColorTarget(64, 64);
+    ASSERT_TRUE(target.isValid());
+
+    CommandList& cmd = dev().beginCommandList("timestamps around dispatches");
+    // A render pass first (as a frame's G-buffer clear): llvmpipe then has a scene queued.
+    cmd.barrier(Barrier::tex(target, Access::None, Access::ColorTarget));
+    RenderPassDesc pass;
+    ColorAttachment color;
+    color.texture = target;
+    color.load = LoadOp::Clear;
+    color.store = StoreOp::Store;
+    pass.colorAttachments = {color};
+    cmd.beginRenderPass(pass);
+    cmd.endRenderPass();
+    cmd.resetQueries(pool, 0, kDispatches + 1);
+    cmd.fillBuffer(data, 0, kElements * 4, 1);
+    cmd.barrier(Barrier::buf(data, Access::CopyDst, rw));
+    cmd.bindPipeline(pipeline);
+    cmd.bindGroup(0, group);
+    cmd.pushConstants(&iterations, sizeof(iterations));
+    cmd.writeTimestamp(pool, 0);
+    for (uint32_t i = 1; i <= kDispatches; ++i) {
+        cmd.dispatch(kElements / 64);
+        cmd.barrier(Barrier::buf(data, rw, rw));
+        cmd.writeTimestamp(pool, i);
+    }
+    submitAndWait(cmd);
+
+    uint64_t ns[kDispatches + 1] = {};
+    ASSERT_TRUE(dev().readTimestamps(pool, 0, kDispatches + 1, ns));
+    const uint64_t total = ns[kDispatches] - ns[0];
+    ASSERT_GT(total, 0u);
+    for (uint32_t i = 1; i <= kDispatches; ++i) {
+        // Metric: interval i's share of the three equal dispatches' total. Threshold: at least 5 %
+        // (a third each on a quiet machine; 0 where the timestamps do not bracket the work).
+        const double share = double(ns[i] - ns[i - 1]) / double(total);
+        std::printf("[ %s ] dispatch %u: %.3f ms (%.0f %%)\n", toString(GetParam()), i,
+                    double(ns[i] - ns[i - 1]) * 1e-6, share * 100.0);
+        EXPECT_GE(share, 0.05) << "dispatch " << i;
+    }
+}
+
 // imageAtomicAdd / imageAtomicMax on R32_UINT storage images, which both backends report as
 // FormatSupport::StorageAtomic: 1024 invocations hit 16 texels 64 times each.
 TEST_P(ConformanceCompute, ImageAtomicsOnR32ui) {
