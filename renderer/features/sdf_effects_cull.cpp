@@ -1,11 +1,13 @@
-// The "sdf_tile_cull_effects" pass (renderer/features/sdf_effects_cull.h): sizes the lists, clears
+// The "sdf_tile_cull_effects" passes (renderer/features/sdf_effects_cull.h): sizes the lists, clears
 // the counters and fills the push constants; the tests live in
-// renderer/shaders/sdf_tile_cull_effects.comp.
+// renderer/shaders/sdf_tile_cull_effects_tiles.comp (each tile's surface) and
+// renderer/shaders/sdf_tile_cull_effects.comp (the lists).
 #include "renderer/features/sdf_effects_cull.h"
 
 #include <algorithm>
 
 #include <shaders/sdf_tile_cull_effects.h>
+#include <shaders/sdf_tile_cull_effects_tiles.h>
 
 #include "renderer/features/fullscreen.h"
 #include "renderer/features/sdf_scene.h"
@@ -15,8 +17,10 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_tile_cull_effects;
+namespace tile_program = shaders::sdf_tile_cull_effects_tiles;
 
 constexpr uint64_t kCounterBytes = 16;
+constexpr uint64_t kTileBytes = 32;  // EffectsTile: two vec4
 
 fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size) {
     rhi::BufferDesc d;
@@ -59,31 +63,68 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ctx.cmd.fillBuffer(ctx.buffer(d.counters), 0, kCounterBytes, 0u);
         });
 
-    struct Data {
+    // Each tile's surface (sdf_tile_cull_effects_tiles.comp): one workgroup per tile.
+    struct Tiles {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
         fg::TextureRef depth;
-        fg::BufferRef counters, shadowRanges, aoRanges, indices;
+        fg::BufferRef tiles;
     };
     const bool fields = sdfScene.atlas.isValid();
-    const rhi::ShaderDesc& cs =
-        program::compute(fields ? program::Variant::SdfFields : program::Variant::Default);
-    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const rhi::ShaderDesc& tileCs =
+        tile_program::compute(fields ? tile_program::Variant::SdfFields : tile_program::Variant::Default);
+    const rhi::PipelineHandle tilePipeline = fc.cache.computePipeline(tileCs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
+    const tile_program::PushConstants tilePush{glm::uvec4(sdfScene.objectCount, lists.tilesX, 0u, 0u),
+                                               glm::vec4(0.0f, 0.0f, desc.footprint, 0.0f)};
+    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
+    const Tiles& tileData = fc.graph.addPass<Tiles>(
+        "sdf_tile_cull_effects_tiles", fg::PassKind::Compute,
+        [&](fg::PassBuilder& b, Tiles& d) {
+            d.scene = *fc.board.find<SceneBuffers>();
+            d.sdf = sdfScene;
+            d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
+            b.read(d.scene.view, rhi::Access::UniformRead);
+            readSdfScene(b, d.sdf);
+            d.tiles =
+                b.write(storageBuffer(b, "sdf.effects_tiles", tiles * kTileBytes), rhi::Access::ShaderWrite);
+        },
+        [&cache = fc.cache, &tileCs, tilePipeline, atlasSampler, nearest, tilePush, groupsX, groupsY](
+            const Tiles& d, fg::PassContext& ctx) {
+            ctx.cmd.bindPipeline(tilePipeline);
+            ShaderParams params(tileCs);
+            params.set("View", ctx.buffer(d.scene.view))
+                .set("gbufferDepth", ctx.texture(d.depth), nearest)
+                .set("EffectsTiles", ctx.buffer(d.tiles));
+            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            if (!params.bind(ctx.cmd, cache, tilePipeline)) return;
+            ctx.cmd.pushConstants(&tilePush, sizeof(tilePush));
+            ctx.cmd.dispatch(groupsX, groupsY);
+        });
+
+    // The lists (sdf_tile_cull_effects.comp): one invocation per tile and list, workgroup row y =
+    // the list.
+    struct Data {
+        SceneBuffers scene;
+        SdfSceneBuffers sdf;
+        fg::BufferRef tiles, counters, shadowRanges, aoRanges, indices;
+    };
+    const rhi::ShaderDesc& cs = program::compute();
+    const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const program::PushConstants push{
         glm::uvec4(sdfScene.objectCount, layers, (ao ? 1u : 0u) | (desc.shadows.hard ? 2u : 0u),
                    uint32_t(capacity)),
-        glm::uvec4(lists.tilesX, lists.tilesY, fc.width, fc.height),
+        glm::uvec4(lists.tilesX, lists.tilesY, uint32_t(tiles), 0u),
         glm::vec4(std::max(desc.ao.maxDistance, 0.0f), 0.0f, desc.footprint, desc.farPlane)};
-    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
+    const uint32_t listGroupsX = uint32_t((tiles + 63) / 64);
     const rhi::Access rw = rhi::Access::ShaderRead | rhi::Access::ShaderWrite;
     const Data& data = fc.graph.addPass<Data>(
         "sdf_tile_cull_effects", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Data& d) {
             d.scene = *fc.board.find<SceneBuffers>();
             d.sdf = sdfScene;
-            d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
+            d.tiles = b.read(tileData.tiles, rhi::Access::ShaderRead);
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
@@ -97,22 +138,24 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             d.indices =
                 b.write(storageBuffer(b, "sdf.effects_tile_indices", indexBytes), rhi::Access::ShaderWrite);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, groupsX, groupsY](
-            const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, push, listGroupsX, listCount](const Data& d,
+                                                                         fg::PassContext& ctx) {
+            if (listCount == 0) return;
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("Scene", ctx.buffer(d.scene.scene))
                 .set("Lights", ctx.buffer(d.scene.lights))
-                .set("gbufferDepth", ctx.texture(d.depth), nearest)
+                .set("EffectsTiles", ctx.buffer(d.tiles))
                 .set("EffectsShadowRanges", ctx.buffer(d.shadowRanges))
                 .set("EffectsAoRanges", ctx.buffer(d.aoRanges))
                 .set("EffectsTileIndices", ctx.buffer(d.indices))
-                .set("EffectsCullCounters", ctx.buffer(d.counters));
-            setSdfScene(params, ctx, d.sdf, atlasSampler);
+                .set("EffectsCullCounters", ctx.buffer(d.counters))
+                .set("SdfObjects", ctx.buffer(d.sdf.objects))
+                .set("ShapeRecords", ctx.buffer(d.sdf.records));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
-            ctx.cmd.dispatch(groupsX, groupsY);
+            ctx.cmd.dispatch(listGroupsX, listCount);
         });
     // Kept to the end of the frame (never aliased after their last use) so tests can read them back.
     fc.graph.markOutput(data.counters);

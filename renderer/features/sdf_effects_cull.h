@@ -1,7 +1,8 @@
 // Feature "sdf_effects_cull": the shadow and AO tile lists (SdfCullLists::shadow and ::ao of
-// renderer/features/sdf_cull.h), after mTec 8.2.6 (shadow culling) and 8.2.8 (AO culling). The pass
-// "sdf_tile_cull_effects" (renderer/shaders/sdf_tile_cull_effects.comp describes the tests) runs
-// after the G-buffer is complete and before sdf_shadow / sdf_ao: per 8x8 tile of the full-resolution
+// renderer/features/sdf_cull.h), after mTec 8.2.6 (shadow culling) and 8.2.8 (AO culling). The passes
+// "sdf_tile_cull_effects_tiles" (each tile's surface sphere) and "sdf_tile_cull_effects"
+// (renderer/shaders/sdf_tile_cull_effects.comp describes the tests) run after the G-buffer is
+// complete and before sdf_shadow / sdf_ao: per 8x8 tile of the full-resolution
 // frame, the casting objects whose bounding sphere meets the region a shadow ray of the tile can
 // cross (one list per shadowed light, layer = GpuLight::shadow.x) or that lie within reach of the
 // tile's AO rays. Conservative: an object any effect ray of the tile can see is in the list; the
@@ -39,7 +40,7 @@ struct SdfEffectsCullCounters {
     uint64_t indexBytes = 0;  // its size (capacity x 4)
 };
 
-// Adds the passes (a transfer clear of the counters, then the compute pass) and publishes
+// Adds the passes (a transfer clear of the counters, then the two compute passes) and publishes
 // SdfCullLists::shadow (desc.shadowLayers > 0) and ::ao (AO on), keeping ::primary, and
 // SdfEffectsCullCounters. Reads
 // SceneBuffers (view, scene constants, lights), SdfSceneBuffers and GBuffer::depth.

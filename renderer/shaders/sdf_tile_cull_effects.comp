@@ -1,13 +1,10 @@
 // sdf_tile_cull_effects: the shadow and AO tile lists (renderer/features/sdf_effects_cull.h; read
 // through sdf_tiles.glsl by sdf_shadow.comp and sdf_ao.comp). After mTec 8.2.6 / 8.2.8 (reference
-// 000). One workgroup of 8x8 invocations per 8x8 pixel tile of the full-resolution frame:
-//  1. the tile's surface: min / max linear depth of its pixels with depth > 0 (background pixels
-//     trace no shadow or AO ray); no surface -> every list of the tile is empty. The bounding
-//     sphere of the frustum slab between those depths (the 8 points of the rays through the
-//     tile's outer pixel corners at min and max depth: every pixel-centre point lies in their
-//     hull), grown by how far a ray's start can leave the surface (the shadows' sdfSurfaceBias:
-//     a quarter pixel footprint, 1.5 voxels of a field);
-//  2. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
+// 000). One invocation per 8x8 pixel tile of the full-resolution frame and list (workgroup row y =
+// the list, so a SIMD group's lanes are neighbouring tiles building the same kind of list), from the
+// tile's surface written by sdf_tile_cull_effects_tiles.comp (the sphere around the tile's visible
+// points, the pixel footprint on it and the rays' start offset; no surface -> the list is empty):
+//  1. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
 //     world bounding sphere (its local box through `model`, Frobenius norm; unbounded objects are
 //     always kept) against the region the effect's rays can reach from the tile's sphere:
 //       shadow, directional: the capsule from the tile sphere along the light direction up to the
@@ -19,15 +16,15 @@
 //         gets an empty list (those pixels trace nothing).
 //       AO: the object's sphere within maxDistance of the tile's sphere: sdf_ao.comp counts an
 //         occluder only when its box is within maxDistance of the pixel's surface point;
-//  3. no fixed cap: each list counts its objects, reserves that many slots with an atomicAdd on
+//  2. no fixed cap: each list counts its objects, reserves that many slots with an atomicAdd on
 //     the frame's counter, then writes them in ascending order. A reservation past the capacity
 //     the CPU sized (sdf_effects_cull.cpp says how) writes (0, 0xffffffff) = "all objects": its
 //     consumer takes the unculled path. counters: 0 slots reserved, 1 lists over capacity,
 //     2 sum of list lengths, 3 lists of tiles with a surface (tests read them back).
-// Loops per invocation: objects / 64 for the voxel bound, 2 x objects per list.
+// Loops per invocation: 2 x objects. No barrier: on CPU devices a workgroup with barriers runs as
+// coroutines, and one workgroup per tile with two busy invocations cost 4-5x this form.
 #version 450
-#pragma penumbra_variants SDF_FIELDS
-layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
+layout(local_size_x = 64) in;
 
 #include "scene.glsl"
 
@@ -41,7 +38,12 @@ SCENE_LIGHTS;
 #define SDF_ATLAS_BINDING 7
 #include "sdf_scene.glsl"
 
-layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
+// Written by sdf_tile_cull_effects_tiles.comp (the same struct).
+struct EffectsTile {
+    vec4 sphere;   // xyz centre, w radius (< 0: no surface)
+    vec4 surface;  // x the largest pixel footprint on it, y the rays' start offset
+};
+layout(set = 2, binding = 0, std430) readonly buffer EffectsTiles { EffectsTile effectsTiles[]; };
 layout(set = 2, binding = 1, std430) writeonly buffer EffectsShadowRanges { uvec2 shadowRanges[]; };
 layout(set = 2, binding = 2, std430) writeonly buffer EffectsAoRanges { uvec2 aoRanges[]; };
 layout(set = 2, binding = 3, std430) writeonly buffer EffectsTileIndices { uint tileIndices[]; };
@@ -49,7 +51,7 @@ layout(set = 2, binding = 8, std430) buffer EffectsCullCounters { uint counters[
 
 layout(push_constant) uniform SdfTileCullEffects {
     uvec4 counts;  // x objects, y shadow layers, z flags (1 AO list, 2 hard shadows), w capacity
-    uvec4 tiles;   // x tilesX, y tilesY
+    uvec4 tiles;   // x tilesX, y tilesY, z tiles
     vec4 params;   // x AO reach (maxDistance), y unused, z pixel footprint per unit distance, w far
 } cull;
 
@@ -57,8 +59,6 @@ const uint kAoFlag = 1u;
 const uint kHardFlag = 2u;
 const uint kAllObjects = 0xffffffffu;
 const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
-
-shared uint s_minDepth, s_maxDepth, s_maxVoxel;
 
 // The tile's surface: sphere (xyz centre, w radius) and the largest pixel footprint on it.
 vec4 g_tile;
@@ -84,27 +84,6 @@ float segmentDistance(vec3 p, vec3 a, vec3 b) {
     float len2 = dot(ab, ab);
     float t = len2 > 0.0 ? clamp(dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
     return length(p - (a + t * ab));
-}
-
-void tileSphere(uvec2 tile, float dmin, float dmax) {
-    vec2 lo = vec2(tile * 8u), hi = min(vec2((tile + 1u) * 8u), view.viewport.xy);
-    vec3 pts[8];
-    float rayLen = 0.0;
-    for (int i = 0; i < 4; ++i) {
-        vec2 corner = vec2((i & 1) != 0 ? hi.x : lo.x, (i & 2) != 0 ? hi.y : lo.y);
-        vec2 ndc = corner * view.viewport.zw * 2.0 - 1.0;
-        vec3 ray = view.forward.xyz + ndc.x * view.rayRight.xyz + ndc.y * view.rayUp.xyz;
-        rayLen = max(rayLen, length(ray));
-        pts[i] = view.position.xyz + dmin * ray;
-        pts[i + 4] = view.position.xyz + dmax * ray;
-    }
-    vec3 c = vec3(0.0);
-    for (int i = 0; i < 8; ++i) c += pts[i];
-    c *= 0.125;
-    float r = 0.0;
-    for (int i = 0; i < 8; ++i) r = max(r, length(pts[i] - c));
-    g_tile = vec4(c, r * 1.0001 + 1e-6 * length(c));  // float rounding of the corners
-    g_pixelSize = cull.params.z * dmax * rayLen;
 }
 
 // Light of a shadow layer (-1: none draws into it).
@@ -198,46 +177,21 @@ uvec2 buildList(bool ao, Region g, float aoReach) {
 }
 
 void main() {
-    uvec2 tile = gl_WorkGroupID.xy;
-    uint lid = gl_LocalInvocationIndex;
-    if (lid == 0u) {
-        s_minDepth = floatBitsToUint(3.0e38);
-        s_maxDepth = 0u;
-        s_maxVoxel = 0u;
-    }
-    barrier();
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (all(lessThan(pixel, ivec2(view.viewport.xy)))) {
-        float depth = texelFetch(gbufferDepth, pixel, 0).r;
-        if (depth > 0.0) {  // positive floats order as their bits
-            atomicMin(s_minDepth, floatBitsToUint(depth));
-            atomicMax(s_maxDepth, floatBitsToUint(depth));
-        }
-    }
-    for (uint obj = lid; obj < cull.counts.x; obj += 64u) {
-        float v = sdfObjectVoxel(obj);
-        if (v > 0.0) atomicMax(s_maxVoxel, floatBitsToUint(v));
-    }
-    barrier();
-
-    uint tileIndex = tile.y * cull.tiles.x + tile.x;
-    uint tiles = cull.tiles.x * cull.tiles.y;
+    uint tileIndex = gl_GlobalInvocationID.x, job = gl_WorkGroupID.y;
+    uint tiles = cull.tiles.z;
+    if (tileIndex >= tiles) return;
     uint layers = cull.counts.y;
-    uint lists = layers + ((cull.counts.z & kAoFlag) != 0u ? 1u : 0u);
-    bool surface = s_maxDepth != 0u;
-    if (surface) tileSphere(tile, uintBitsToFloat(s_minDepth), uintBitsToFloat(s_maxDepth));
-    // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the nearest field.
-    float bias = max(0.25 * g_pixelSize, 1.5 * uintBitsToFloat(s_maxVoxel));
-    for (uint job = lid; job < lists; job += 64u) {
-        bool ao = job == layers;
-        Region g;
-        g.empty = !surface;
-        if (surface && !ao) g = shadowRegion(job, bias);
-        uvec2 range = uvec2(0u);
-        if (!g.empty) range = buildList(ao, g, g_tile.w + cull.params.x);
-        if (ao)
-            aoRanges[tileIndex] = range;
-        else
-            shadowRanges[job * tiles + tileIndex] = range;
-    }
+    bool ao = job == layers;
+    EffectsTile t = effectsTiles[tileIndex];
+    g_tile = t.sphere;
+    g_pixelSize = t.surface.x;
+    Region g;
+    g.empty = t.sphere.w < 0.0;
+    if (!g.empty && !ao) g = shadowRegion(job, t.surface.y);
+    uvec2 range = uvec2(0u);
+    if (!g.empty) range = buildList(ao, g, g_tile.w + cull.params.x);
+    if (ao)
+        aoRanges[tileIndex] = range;
+    else
+        shadowRanges[job * tiles + tileIndex] = range;
 }
