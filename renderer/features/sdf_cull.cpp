@@ -146,8 +146,11 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
     struct Data {
         fg::BufferRef view, objects, counter, inRanges, inIndices, ranges, indices;
     };
-    const rhi::ShaderDesc& cs = program::compute();
+    // The fine level reads coarse lists: one invocation per tile, one workgroup per coarse tile.
+    const bool fine = in.ranges.isValid();
+    const rhi::ShaderDesc& cs = program::compute(fine ? program::Variant::Fine : program::Variant::Default);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
+    const glm::uvec2 groups = fine ? (in.tiles + (kCoarse - 1)) / kCoarse : in.tiles;
     const program::PushConstants push{
         glm::uvec4(in.count, uint32_t(in.capacity), in.tiles.x, in.tiles.y),
         glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f),
@@ -167,7 +170,7 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
             d.ranges = b.write(storageBuffer(b, rangesName.c_str(), rangeBytes), rhi::Access::ShaderWrite);
             d.indices = b.write(storageBuffer(b, indicesName.c_str(), indexBytes), rhi::Access::ShaderWrite);
         },
-        [&cache = fc.cache, &cs, pipeline, push](const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, push, groups](const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.view))
@@ -179,7 +182,7 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
                 .set("SdfTileIndicesOut", ctx.buffer(d.indices));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
-            ctx.cmd.dispatch(push.counts.z, push.counts.w);
+            ctx.cmd.dispatch(groups.x, groups.y);
         });
     CullLevel out = in;
     out.counter = data.counter;

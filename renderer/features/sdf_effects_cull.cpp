@@ -63,7 +63,7 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ctx.cmd.fillBuffer(ctx.buffer(d.counters), 0, kCounterBytes, 0u);
         });
 
-    // Each tile's surface (sdf_tile_cull_effects_tiles.comp): one workgroup per tile.
+    // Each tile's surface (sdf_tile_cull_effects_tiles.comp): one invocation per tile.
     struct Tiles {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
@@ -76,9 +76,10 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     const rhi::PipelineHandle tilePipeline = fc.cache.computePipeline(tileCs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
-    const tile_program::PushConstants tilePush{glm::uvec4(sdfScene.objectCount, lists.tilesX, 0u, 0u),
-                                               glm::vec4(0.0f, 0.0f, desc.footprint, 0.0f)};
-    const uint32_t groupsX = lists.tilesX, groupsY = lists.tilesY;
+    const tile_program::PushConstants tilePush{
+        glm::uvec4(sdfScene.objectCount, lists.tilesX, lists.tilesY, 0u),
+        glm::vec4(0.0f, 0.0f, desc.footprint, 0.0f)};
+    const uint32_t groupsX = (lists.tilesX + 7) / 8, groupsY = (lists.tilesY + 7) / 8;
     const Tiles& tileData = fc.graph.addPass<Tiles>(
         "sdf_tile_cull_effects_tiles", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Tiles& d) {

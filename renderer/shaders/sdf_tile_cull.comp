@@ -2,7 +2,11 @@
 // Two levels, one dispatch each: coarse tiles of 64x64 pixels list from all objects, then the 8x8
 // pixel tiles list from their coarse tile's list (a coarse tile on the "all objects" fallback hands
 // its tiles every object), so a tile tests the objects near it instead of all of them.
-// One workgroup of 64 invocations per tile of the level:
+// The coarse level runs one workgroup of 64 invocations per coarse tile (the objects split across
+// them, barriers between the steps); the fine level (variant FINE) one invocation per 8x8 tile,
+// one workgroup per coarse tile, each invocation over its coarse tile's whole list with no barrier
+// (on CPU devices a workgroup with barriers runs as coroutines: the workgroup-per-tile form cost
+// about 4x this one), the tile's lanes looping the same list in step. Per tile:
 //  1. the tile frustum: the camera position and the rays through the tile's outer pixel corners
 //     (the ray construction of sdf_trace.comp: forward + ndc.x rayRight + ndc.y rayUp), bounded by
 //     the near and far planes (linear depth). The corners enclose every pixel-centre ray of the tile
@@ -22,8 +26,10 @@
 //     upper bound of this total, capped at kSdfTileMaxIndices); a reservation past that capacity -
 //     unreachable below the cap - writes (0, 0xffffffff), "all objects", and the consumer loops
 //     over every object.
-// Per-invocation loops run count / 64 iterations (software drivers dislike very long loops).
+// Per-invocation loops run count / 64 iterations at the coarse level, the coarse list's length
+// (twice) at the fine level.
 #version 450
+#pragma penumbra_variants FINE
 layout(local_size_x = 64) in;
 
 #include "view.glsl"
@@ -100,15 +106,49 @@ bool objectInTile(uint obj, uvec2 tile) {
     return true;
 }
 
-shared uint s_count;
-shared uint s_base;
-shared bool s_overflow;
-shared uint s_mask[2];
-
 // The candidates: every object, or the coarse tile's list (ascending, so this tile's is too).
 uint g_first;
 bool g_direct;
 uint candidate(uint k) { return g_direct ? k : coarseIndices[g_first + k]; }
+
+#ifdef FINE
+void main() {
+    // Workgroup = coarse tile, invocation = one of its 8x8 tiles (a SIMD group: a row of them).
+    uint lid = gl_LocalInvocationIndex;
+    uvec2 tile = gl_WorkGroupID.xy * 8u + uvec2(lid % 8u, lid / 8u);
+    if (tile.x >= cull.counts.z || tile.y >= cull.counts.w) return;
+    uint tileIndex = tile.y * cull.counts.z + tile.x;
+    uint count = cull.counts.x;
+    g_first = 0u;
+    g_direct = true;
+    uvec2 coarse = coarseRanges[gl_WorkGroupID.y * cull.level.w + gl_WorkGroupID.x];
+    if (coarse.y != kAllObjects) {
+        g_first = coarse.x;
+        count = coarse.y;
+        g_direct = false;
+    }
+    tilePlanes(tile);
+    // 1. Count.
+    uint n = 0u;
+    for (uint k = 0u; k < count; ++k)
+        if (objectInTile(candidate(k), tile)) ++n;
+    // 2. Reserve the tile's slots (the prefix sum across tiles).
+    uint base = n > 0u ? atomicAdd(reserved[cull.level.z], n) : 0u;
+    bool overflow = base > cull.counts.y || n > cull.counts.y - base;
+    rangesOut[tileIndex] = overflow ? uvec2(0u, kAllObjects) : uvec2(base, n);
+    if (overflow || n == 0u) return;
+    // 3. Write the indices in ascending order.
+    uint slot = base;
+    for (uint k = 0u; k < count && slot < base + n; ++k) {
+        uint obj = candidate(k);
+        if (objectInTile(obj, tile)) indicesOut[slot++] = obj;
+    }
+}
+#else
+shared uint s_count;
+shared uint s_base;
+shared bool s_overflow;
+shared uint s_mask[2];
 
 void main() {
     uvec2 tile = gl_WorkGroupID.xy;
@@ -170,3 +210,4 @@ void main() {
         barrier();  // every invocation has read the mask before the next chunk clears it
     }
 }
+#endif

@@ -1,7 +1,7 @@
 // sdf_tile_cull_effects_tiles: the per-tile half of the shadow and AO tile lists
 // (sdf_tile_cull_effects.comp builds the lists from it; renderer/features/sdf_effects_cull.h). One
-// workgroup of 8x8 invocations per 8x8 pixel tile of the full-resolution frame writes the tile's
-// surface: min / max linear depth of its pixels with depth > 0 (background pixels trace no shadow
+// invocation per 8x8 pixel tile of the full-resolution frame (a workgroup per 8x8 tiles) writes the
+// tile's surface: min / max linear depth of its pixels with depth > 0 (background pixels trace no shadow
 // or AO ray; no such pixel: radius -1, every list of the tile is empty), the bounding sphere of the
 // frustum slab between those depths (the 8 points of the rays through the tile's outer pixel
 // corners at min and max depth: every pixel-centre point lies in their hull), the largest pixel
@@ -31,11 +31,9 @@ layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 1, std430) writeonly buffer EffectsTiles { EffectsTile effectsTiles[]; };
 
 layout(push_constant) uniform SdfTileCullEffectsTiles {
-    uvec4 counts;  // x objects, y tilesX
+    uvec4 counts;  // x objects, y tilesX, z tilesY
     vec4 params;   // z pixel footprint per unit distance
 } cull;
-
-shared uint s_minDepth, s_maxDepth, s_maxVoxel;
 
 vec4 g_tile;
 float g_pixelSize;
@@ -62,36 +60,31 @@ void tileSphere(uvec2 tile, float dmin, float dmax) {
 }
 
 void main() {
-    uvec2 tile = gl_WorkGroupID.xy;
+    // One invocation per tile (a workgroup: 8x8 tiles), no barrier: on CPU devices a workgroup
+    // with barriers runs as coroutines.
     uint lid = gl_LocalInvocationIndex;
-    if (lid == 0u) {
-        s_minDepth = floatBitsToUint(3.0e38);
-        s_maxDepth = 0u;
-        s_maxVoxel = 0u;
-    }
-    barrier();
-    ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
-    if (all(lessThan(pixel, ivec2(view.viewport.xy)))) {
-        float depth = texelFetch(gbufferDepth, pixel, 0).r;
-        if (depth > 0.0) {  // positive floats order as their bits
-            atomicMin(s_minDepth, floatBitsToUint(depth));
-            atomicMax(s_maxDepth, floatBitsToUint(depth));
+    uvec2 tile = gl_WorkGroupID.xy * 8u + uvec2(lid % 8u, lid / 8u);
+    if (tile.x >= cull.counts.y || tile.y >= cull.counts.z) return;
+    float minDepth = 3.0e38, maxDepth = 0.0;
+    ivec2 lo = ivec2(tile * 8u), hi = min(lo + 8, ivec2(view.viewport.xy));
+    for (int y = lo.y; y < hi.y; ++y)
+        for (int x = lo.x; x < hi.x; ++x) {
+            float depth = texelFetch(gbufferDepth, ivec2(x, y), 0).r;
+            if (depth > 0.0) {
+                minDepth = min(minDepth, depth);
+                maxDepth = max(maxDepth, depth);
+            }
         }
-    }
-    for (uint obj = lid; obj < cull.counts.x; obj += 64u) {
-        float v = sdfObjectVoxel(obj);
-        if (v > 0.0) atomicMax(s_maxVoxel, floatBitsToUint(v));
-    }
-    barrier();
-    if (lid != 0u) return;
     EffectsTile t;
     t.sphere = vec4(0.0, 0.0, 0.0, -1.0);
     t.surface = vec4(0.0);
-    if (s_maxDepth != 0u) {
-        tileSphere(tile, uintBitsToFloat(s_minDepth), uintBitsToFloat(s_maxDepth));
+    if (maxDepth > 0.0) {
+        float maxVoxel = 0.0;
+        for (uint obj = 0u; obj < cull.counts.x; ++obj) maxVoxel = max(maxVoxel, sdfObjectVoxel(obj));
+        tileSphere(tile, minDepth, maxDepth);
         t.sphere = g_tile;
         // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the nearest field.
-        t.surface = vec4(g_pixelSize, max(0.25 * g_pixelSize, 1.5 * uintBitsToFloat(s_maxVoxel)), 0.0, 0.0);
+        t.surface = vec4(g_pixelSize, max(0.25 * g_pixelSize, 1.5 * maxVoxel), 0.0, 0.0);
     }
     effectsTiles[tile.y * cull.counts.y + tile.x] = t;
 }
