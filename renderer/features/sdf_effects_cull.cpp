@@ -19,8 +19,10 @@ namespace {
 namespace program = shaders::sdf_tile_cull_effects;
 namespace tile_program = shaders::sdf_tile_cull_effects_tiles;
 
-constexpr uint64_t kCounterBytes = 16;
-constexpr uint64_t kTileBytes = 32;  // EffectsTile: two vec4
+// Counters 0-3 (SdfEffectsCullCounters) and 4, the frame's largest field voxel (float bits).
+constexpr uint64_t kCounterBytes = 32;
+constexpr uint64_t kTileBytes = 32;    // EffectsTile: two vec4
+constexpr uint64_t kObjectBytes = 32;  // EffectsObject: two vec4
 
 fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size) {
     rhi::BufferDesc d;
@@ -63,12 +65,13 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ctx.cmd.fillBuffer(ctx.buffer(d.counters), 0, kCounterBytes, 0u);
         });
 
-    // Each tile's surface (sdf_tile_cull_effects_tiles.comp): one invocation per tile.
+    // Each tile's surface, each object's sphere and the largest field voxel
+    // (sdf_tile_cull_effects_tiles.comp): one invocation per tile.
     struct Tiles {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
         fg::TextureRef depth;
-        fg::BufferRef tiles;
+        fg::BufferRef tiles, objects, counters;
     };
     const bool fields = sdfScene.atlas.isValid();
     const rhi::ShaderDesc& tileCs =
@@ -90,6 +93,10 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             readSdfScene(b, d.sdf);
             d.tiles =
                 b.write(storageBuffer(b, "sdf.effects_tiles", tiles * kTileBytes), rhi::Access::ShaderWrite);
+            d.objects = b.write(
+                storageBuffer(b, "sdf.effects_objects", uint64_t(sdfScene.objectCount) * kObjectBytes),
+                rhi::Access::ShaderWrite);
+            d.counters = b.write(clear.counters, rhi::Access::ShaderRead | rhi::Access::ShaderWrite);
         },
         [&cache = fc.cache, &tileCs, tilePipeline, atlasSampler, nearest, tilePush, groupsX, groupsY](
             const Tiles& d, fg::PassContext& ctx) {
@@ -97,7 +104,9 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ShaderParams params(tileCs);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
-                .set("EffectsTiles", ctx.buffer(d.tiles));
+                .set("EffectsTiles", ctx.buffer(d.tiles))
+                .set("EffectsObjects", ctx.buffer(d.objects))
+                .set("EffectsCullCounters", ctx.buffer(d.counters));
             setSdfScene(params, ctx, d.sdf, atlasSampler);
             if (!params.bind(ctx.cmd, cache, tilePipeline)) return;
             ctx.cmd.pushConstants(&tilePush, sizeof(tilePush));
@@ -108,8 +117,7 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     // the list.
     struct Data {
         SceneBuffers scene;
-        SdfSceneBuffers sdf;
-        fg::BufferRef tiles, counters, shadowRanges, aoRanges, indices;
+        fg::BufferRef tiles, objects, counters, shadowRanges, aoRanges, indices;
     };
     const rhi::ShaderDesc& cs = program::compute();
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
@@ -124,13 +132,12 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
         "sdf_tile_cull_effects", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Data& d) {
             d.scene = *fc.board.find<SceneBuffers>();
-            d.sdf = sdfScene;
             d.tiles = b.read(tileData.tiles, rhi::Access::ShaderRead);
+            d.objects = b.read(tileData.objects, rhi::Access::ShaderRead);
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
-            readSdfScene(b, d.sdf);
-            d.counters = b.write(clear.counters, rw);
+            d.counters = b.write(tileData.counters, rw);
             d.shadowRanges =
                 b.write(storageBuffer(b, "sdf.shadow_tile_ranges", tiles * std::max(layers, 1u) * 8),
                         rhi::Access::ShaderWrite);
@@ -148,12 +155,11 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
                 .set("Scene", ctx.buffer(d.scene.scene))
                 .set("Lights", ctx.buffer(d.scene.lights))
                 .set("EffectsTiles", ctx.buffer(d.tiles))
+                .set("EffectsObjects", ctx.buffer(d.objects))
                 .set("EffectsShadowRanges", ctx.buffer(d.shadowRanges))
                 .set("EffectsAoRanges", ctx.buffer(d.aoRanges))
                 .set("EffectsTileIndices", ctx.buffer(d.indices))
-                .set("EffectsCullCounters", ctx.buffer(d.counters))
-                .set("SdfObjects", ctx.buffer(d.sdf.objects))
-                .set("ShapeRecords", ctx.buffer(d.sdf.records));
+                .set("EffectsCullCounters", ctx.buffer(d.counters));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             ctx.cmd.dispatch(listGroupsX, listCount);

@@ -33,7 +33,8 @@ uint64_t sdfEffectsListCapacity(uint64_t tiles, uint32_t lists, uint32_t objects
 
 // The pass's counters (4 x uint32, kept to the end of the frame for SceneRenderer::readBuffer
 // "sdf.effects_cull_counters"): slots reserved, lists over capacity, sum of list lengths, lists of
-// tiles with a surface (mean list length = [2] / [3]).
+// tiles with a surface (mean list length = [2] / [3]). The buffer holds a fifth, internal slot: the
+// frame's largest field voxel (float bits) from sdf_tile_cull_effects_tiles for the lists pass.
 struct SdfEffectsCullCounters {
     fg::BufferRef buffer;
     fg::BufferRef indices;    // the shadow and AO lists' shared indices ("sdf.effects_tile_indices")

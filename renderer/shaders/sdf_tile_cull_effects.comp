@@ -6,7 +6,7 @@
 // points, the pixel footprint on it and the rays' start offset; no surface -> the list is empty):
 //  1. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
 //     world bounding sphere (its local box through `model`, Frobenius norm; unbounded objects are
-//     always kept) against the region the effect's rays can reach from the tile's sphere:
+//     always kept; computed once per frame by sdf_tile_cull_effects_tiles.comp) against the region the effect's rays can reach from the tile's sphere:
 //       shadow, directional: the capsule from the tile sphere along the light direction up to the
 //         far plane (the march's tMax); point / sphere light: the capsule from the tile sphere to
 //         the light's position (its rays end on the light's sphere). The object's sphere is grown
@@ -20,7 +20,8 @@
 //     the frame's counter, then writes them in ascending order. A reservation past the capacity
 //     the CPU sized (sdf_effects_cull.cpp says how) writes (0, 0xffffffff) = "all objects": its
 //     consumer takes the unculled path. counters: 0 slots reserved, 1 lists over capacity,
-//     2 sum of list lengths, 3 lists of tiles with a surface (tests read them back).
+//     2 sum of list lengths, 3 lists of tiles with a surface (tests read them back); 4 the largest
+//     field voxel (float bits, written by sdf_tile_cull_effects_tiles.comp).
 // Loops per invocation: 2 x objects. No barrier: on CPU devices a workgroup with barriers runs as
 // coroutines, and one workgroup per tile with two busy invocations cost 4-5x this form.
 #version 450
@@ -31,19 +32,20 @@ layout(local_size_x = 64) in;
 SCENE_CONSTANTS;
 SCENE_LIGHTS;
 
-#define SDF_SCENE_SET 2
-#define SDF_OBJECTS_BINDING 4
-#define SHAPE_RECORDS_BINDING 5
-#define SDF_FIELDS_BINDING 6
-#define SDF_ATLAS_BINDING 7
-#include "sdf_scene.glsl"
-
 // Written by sdf_tile_cull_effects_tiles.comp (the same struct).
 struct EffectsTile {
     vec4 sphere;   // xyz centre, w radius (< 0: no surface)
     vec4 surface;  // x the largest pixel footprint on it, y the rays' start offset
 };
+// Per object, also from sdf_tile_cull_effects_tiles.comp: xyz its world bounding sphere's centre, w
+// its radius (< 0: unbounded, in every list); x its sphere's growth per unit of cone growth
+// (1.7320508 frob / sigma_min; < 0: casts no shadow, in no list).
+struct EffectsObject {
+    vec4 sphere;
+    vec4 growth;
+};
 layout(set = 2, binding = 0, std430) readonly buffer EffectsTiles { EffectsTile effectsTiles[]; };
+layout(set = 2, binding = 4, std430) readonly buffer EffectsObjects { EffectsObject effectsObjects[]; };
 layout(set = 2, binding = 1, std430) writeonly buffer EffectsShadowRanges { uvec2 shadowRanges[]; };
 layout(set = 2, binding = 2, std430) writeonly buffer EffectsAoRanges { uvec2 aoRanges[]; };
 layout(set = 2, binding = 3, std430) writeonly buffer EffectsTileIndices { uint tileIndices[]; };
@@ -58,26 +60,10 @@ layout(push_constant) uniform SdfTileCullEffects {
 const uint kAoFlag = 1u;
 const uint kHardFlag = 2u;
 const uint kAllObjects = 0xffffffffu;
-const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
 
 // The tile's surface: sphere (xyz centre, w radius) and the largest pixel footprint on it.
 vec4 g_tile;
 float g_pixelSize;
-
-bool unboundedObject(uint obj) {
-    return any(greaterThanEqual(abs(sdfObjects[obj].boundsMin.xyz), vec3(0.5e30))) ||
-           any(greaterThanEqual(abs(sdfObjects[obj].boundsMax.xyz), vec3(0.5e30)));
-}
-
-// World bounding sphere of the object's local box (as sdf_cone.glsl's sdfConeFarthest), and the
-// Frobenius norm of its model (bounds the largest singular value) in `frob`.
-vec4 objectSphere(uint obj, out float frob) {
-    mat4 m = sdfObjects[obj].model;
-    vec3 lc = 0.5 * (sdfObjects[obj].boundsMin.xyz + sdfObjects[obj].boundsMax.xyz);
-    vec3 lh = 0.5 * (sdfObjects[obj].boundsMax.xyz - sdfObjects[obj].boundsMin.xyz);
-    frob = sqrt(dot(m[0].xyz, m[0].xyz) + dot(m[1].xyz, m[1].xyz) + dot(m[2].xyz, m[2].xyz));
-    return vec4((m * vec4(lc, 1.0)).xyz, length(lh) * frob);
-}
 
 float segmentDistance(vec3 p, vec3 a, vec3 b) {
     vec3 ab = b - a;
@@ -137,24 +123,22 @@ Region shadowRegion(uint layer, float bias) {
 }
 
 bool inShadowList(uint obj, Region g) {
-    if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) return false;
-    if (unboundedObject(obj)) return true;
-    float frob;
-    vec4 s = objectSphere(obj, frob);
+    vec4 s = effectsObjects[obj].sphere;
+    float growth = effectsObjects[obj].growth.x;
+    if (growth < 0.0) return false;
+    if (s.w < 0.0) return true;
     float grow = g.growMax >= 0.0 ? g.growMax
                                   : g.tanHalf * min(g.tMax, length(s.xyz - g.a) + g.radius + s.w);
     grow += g.epsilon;
     // sdfConeInterval grows the local box by grow / sigma_min on every axis: its world sphere.
-    float sigma = max(sdfObjects[obj].boundsMin.w, 1e-30);
-    float grown = s.w + 1.7320508 * grow * frob / sigma;
+    float grown = s.w + grow * growth;
     return segmentDistance(s.xyz, g.a, g.b) <= (g.radius + grown) * 1.0001;
 }
 
 bool inAoList(uint obj, float reach) {
-    if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) return false;
-    if (unboundedObject(obj)) return true;
-    float frob;
-    vec4 s = objectSphere(obj, frob);
+    vec4 s = effectsObjects[obj].sphere;
+    if (effectsObjects[obj].growth.x < 0.0) return false;
+    if (s.w < 0.0) return true;
     return length(s.xyz - g_tile.xyz) <= (reach + s.w) * 1.0001;
 }
 
@@ -187,7 +171,10 @@ void main() {
     g_pixelSize = t.surface.x;
     Region g;
     g.empty = t.sphere.w < 0.0;
-    if (!g.empty && !ao) g = shadowRegion(job, t.surface.y);
+    // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the frame's largest field
+    // voxel (counters[4], the tiles pass's atomicMax).
+    float bias = max(t.surface.y, 1.5 * uintBitsToFloat(counters[4]));
+    if (!g.empty && !ao) g = shadowRegion(job, bias);
     uvec2 range = uvec2(0u);
     if (!g.empty) range = buildList(ao, g, g_tile.w + cull.params.x);
     if (ao)

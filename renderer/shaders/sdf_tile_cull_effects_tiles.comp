@@ -6,7 +6,9 @@
 // frustum slab between those depths (the 8 points of the rays through the tile's outer pixel
 // corners at min and max depth: every pixel-centre point lies in their hull), the largest pixel
 // footprint on it, and how far a ray's start can leave the surface (the shadows' sdfSurfaceBias: a
-// quarter pixel footprint, at least 1.5 voxels of the frame's largest field voxel).
+// quarter pixel footprint; sdf_tile_cull_effects.comp raises it to 1.5 of the frame's largest field
+// voxel). Its invocations also write, once per frame, each object's world bounding sphere and
+// growth for the lists, and the largest field voxel (counters[4]).
 #version 450
 #pragma penumbra_variants SDF_FIELDS
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
@@ -27,8 +29,52 @@ struct EffectsTile {
     vec4 surface;
 };
 
+// Per object: xyz world bounding sphere centre, w radius (< 0: unbounded); x the sphere's growth
+// per unit of cone growth (< 0: casts no shadow). The layout sdf_tile_cull_effects.comp reads.
+struct EffectsObject {
+    vec4 sphere;
+    vec4 growth;
+};
+
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 1, std430) writeonly buffer EffectsTiles { EffectsTile effectsTiles[]; };
+layout(set = 2, binding = 6, std430) writeonly buffer EffectsObjects { EffectsObject effectsObjects[]; };
+layout(set = 2, binding = 7, std430) buffer EffectsCullCounters { uint counters[]; };
+
+const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
+
+bool unboundedObject(uint obj) {
+    return any(greaterThanEqual(abs(sdfObjects[obj].boundsMin.xyz), vec3(0.5e30))) ||
+           any(greaterThanEqual(abs(sdfObjects[obj].boundsMax.xyz), vec3(0.5e30)));
+}
+
+// World bounding sphere of the object's local box (as sdf_cone.glsl's sdfConeFarthest), and the
+// Frobenius norm of its model (bounds the largest singular value) in `frob`.
+vec4 objectSphere(uint obj, out float frob) {
+    mat4 m = sdfObjects[obj].model;
+    vec3 lc = 0.5 * (sdfObjects[obj].boundsMin.xyz + sdfObjects[obj].boundsMax.xyz);
+    vec3 lh = 0.5 * (sdfObjects[obj].boundsMax.xyz - sdfObjects[obj].boundsMin.xyz);
+    frob = sqrt(dot(m[0].xyz, m[0].xyz) + dot(m[1].xyz, m[1].xyz) + dot(m[2].xyz, m[2].xyz));
+    return vec4((m * vec4(lc, 1.0)).xyz, length(lh) * frob);
+}
+
+// The object's record for the lists.
+EffectsObject effectsObject(uint obj) {
+    EffectsObject e;
+    e.sphere = vec4(0.0);
+    e.growth = vec4(-1.0, 0.0, 0.0, 0.0);
+    if ((sdfObjects[obj].params.y & kCastsShadows) == 0u) return e;
+    e.growth.x = 0.0;
+    if (unboundedObject(obj)) {
+        e.sphere.w = -1.0;
+        return e;
+    }
+    float frob;
+    e.sphere = objectSphere(obj, frob);
+    // sdfConeInterval grows the local box by grow / sigma_min on every axis: its world sphere.
+    e.growth.x = 1.7320508 * frob / max(sdfObjects[obj].boundsMin.w, 1e-30);
+    return e;
+}
 
 layout(push_constant) uniform SdfTileCullEffectsTiles {
     uvec4 counts;  // x objects, y tilesX, z tilesY
@@ -60,6 +106,14 @@ void tileSphere(uvec2 tile, float dmin, float dmax) {
 }
 
 void main() {
+    // The objects' records and the largest field voxel, objects spread over every invocation.
+    uint invocation = gl_GlobalInvocationID.y * gl_NumWorkGroups.x * 8u + gl_GlobalInvocationID.x;
+    uint invocations = gl_NumWorkGroups.x * gl_NumWorkGroups.y * 64u;
+    for (uint obj = invocation; obj < cull.counts.x; obj += invocations) {
+        effectsObjects[obj] = effectsObject(obj);
+        float v = sdfObjectVoxel(obj);
+        if (v > 0.0) atomicMax(counters[4], floatBitsToUint(v));  // positive floats order as bits
+    }
     // One invocation per tile (a workgroup: 8x8 tiles), no barrier: on CPU devices a workgroup
     // with barriers runs as coroutines.
     uint lid = gl_LocalInvocationIndex;
@@ -79,12 +133,10 @@ void main() {
     t.sphere = vec4(0.0, 0.0, 0.0, -1.0);
     t.surface = vec4(0.0);
     if (maxDepth > 0.0) {
-        float maxVoxel = 0.0;
-        for (uint obj = 0u; obj < cull.counts.x; ++obj) maxVoxel = max(maxVoxel, sdfObjectVoxel(obj));
         tileSphere(tile, minDepth, maxDepth);
         t.sphere = g_tile;
-        // sdfSurfaceBias: a quarter pixel footprint, at least 1.5 voxels of the nearest field.
-        t.surface = vec4(g_pixelSize, max(0.25 * g_pixelSize, 1.5 * maxVoxel), 0.0, 0.0);
+        // A quarter pixel footprint (the lists pass raises it to 1.5 of the largest field voxel).
+        t.surface = vec4(g_pixelSize, 0.25 * g_pixelSize, 0.0, 0.0);
     }
     effectsTiles[tile.y * cull.counts.y + tile.x] = t;
 }
