@@ -184,47 +184,42 @@ TEST_P(ConformanceCompute, StorageImageMipLevelBinding) {
 // than the first, and the elapsed time is plausible.
 TEST_P(ConformanceQueries, TimestampsIncrease) {
     ASSERT_TRUE(dev().info().limits.timestamps) << "timestamp queries are expected on both backends";
-    constexpr uint32_t kElements = kBusyElements;
     constexpr uint32_t kStamps = 6;
     const Busy busy = makeBusy(8);
     ASSERT_TRUE(busy.valid());
-    const BufferHandle data = busy.data;
-    const PipelineHandle pipeline = busy.pipeline;
-    const BindGroupHandle group = busy.group;
-    const QueryPoolHandle pool = busy.pool;
     const uint32_t iterations = 64;
 
     CommandList& first = dev().beginCommandList("timestamps 1");
-    first.resetQueries(pool, 0, 8);
-    first.fillBuffer(data, 0, kElements * 4, 1);
-    first.barrier(Barrier::buf(data, Access::CopyDst, Access::ShaderRead | Access::ShaderWrite));
-    first.bindPipeline(pipeline);
-    first.bindGroup(0, group);
+    first.resetQueries(busy.pool, 0, 8);
+    first.fillBuffer(busy.data, 0, kBusyElements * 4, 1);
+    first.barrier(Barrier::buf(busy.data, Access::CopyDst, Access::ShaderRead | Access::ShaderWrite));
+    first.bindPipeline(busy.pipeline);
+    first.bindGroup(0, busy.group);
     first.pushConstants(&iterations, sizeof(iterations));
-    first.writeTimestamp(pool, 0);
+    first.writeTimestamp(busy.pool, 0);
     for (uint32_t i = 1; i < 4; ++i) {
-        first.dispatch(kElements / 64);
-        first.barrier(Barrier::buf(data, Access::ShaderRead | Access::ShaderWrite,
+        first.dispatch(kBusyElements / 64);
+        first.barrier(Barrier::buf(busy.data, Access::ShaderRead | Access::ShaderWrite,
                                    Access::ShaderRead | Access::ShaderWrite));
-        first.writeTimestamp(pool, i);
+        first.writeTimestamp(busy.pool, i);
     }
     dev().submit(first);
 
     const Access rw = Access::ShaderRead | Access::ShaderWrite;
     CommandList& second = dev().beginCommandList("timestamps 2");
-    second.barrier(Barrier::buf(data, rw, rw));
-    second.bindPipeline(pipeline);
-    second.bindGroup(0, group);
+    second.barrier(Barrier::buf(busy.data, rw, rw));
+    second.bindPipeline(busy.pipeline);
+    second.bindGroup(0, busy.group);
     second.pushConstants(&iterations, sizeof(iterations));
-    second.dispatch(kElements / 64);
-    second.writeTimestamp(pool, 4);
-    second.barrier(Barrier::buf(data, rw, rw));
-    second.dispatch(kElements / 64);
-    second.writeTimestamp(pool, 5);
+    second.dispatch(kBusyElements / 64);
+    second.writeTimestamp(busy.pool, 4);
+    second.barrier(Barrier::buf(busy.data, rw, rw));
+    second.dispatch(kBusyElements / 64);
+    second.writeTimestamp(busy.pool, 5);
     submitAndWait(second);
 
     uint64_t ns[kStamps] = {};
-    ASSERT_TRUE(dev().readTimestamps(pool, 0, kStamps, ns));
+    ASSERT_TRUE(dev().readTimestamps(busy.pool, 0, kStamps, ns));
     for (uint32_t i = 1; i < kStamps; ++i) {
         // Metric: timestamp i >= timestamp i-1. Threshold: non-decreasing.
         EXPECT_GE(ns[i], ns[i - 1]) << "timestamp " << i;
@@ -243,14 +238,9 @@ TEST_P(ConformanceQueries, TimestampsIncrease) {
 // llvmpipe's OpenGL charged penumbra bench objects' sdf_ao to sdf_shadow (0 ms for sdf_ao).
 TEST_P(ConformanceQueries, TimestampsBracketTheirDispatches) {
     ASSERT_TRUE(dev().info().limits.timestamps) << "timestamp queries are expected on both backends";
-    constexpr uint32_t kElements = kBusyElements;
     constexpr uint32_t kDispatches = 3;
     const Busy busy = makeBusy(kDispatches + 1);
     ASSERT_TRUE(busy.valid());
-    const BufferHandle data = busy.data;
-    const PipelineHandle pipeline = busy.pipeline;
-    const BindGroupHandle group = busy.group;
-    const QueryPoolHandle pool = busy.pool;
     const uint32_t iterations = 256;
     const Access rw = Access::ShaderRead | Access::ShaderWrite;
 
@@ -268,22 +258,22 @@ TEST_P(ConformanceQueries, TimestampsBracketTheirDispatches) {
     pass.colorAttachments = {color};
     cmd.beginRenderPass(pass);
     cmd.endRenderPass();
-    cmd.resetQueries(pool, 0, kDispatches + 1);
-    cmd.fillBuffer(data, 0, kElements * 4, 1);
-    cmd.barrier(Barrier::buf(data, Access::CopyDst, rw));
-    cmd.bindPipeline(pipeline);
-    cmd.bindGroup(0, group);
+    cmd.resetQueries(busy.pool, 0, kDispatches + 1);
+    cmd.fillBuffer(busy.data, 0, kBusyElements * 4, 1);
+    cmd.barrier(Barrier::buf(busy.data, Access::CopyDst, rw));
+    cmd.bindPipeline(busy.pipeline);
+    cmd.bindGroup(0, busy.group);
     cmd.pushConstants(&iterations, sizeof(iterations));
-    cmd.writeTimestamp(pool, 0);
+    cmd.writeTimestamp(busy.pool, 0);
     for (uint32_t i = 1; i <= kDispatches; ++i) {
-        cmd.dispatch(kElements / 64);
-        cmd.barrier(Barrier::buf(data, rw, rw));
-        cmd.writeTimestamp(pool, i);
+        cmd.dispatch(kBusyElements / 64);
+        cmd.barrier(Barrier::buf(busy.data, rw, rw));
+        cmd.writeTimestamp(busy.pool, i);
     }
     submitAndWait(cmd);
 
     uint64_t ns[kDispatches + 1] = {};
-    ASSERT_TRUE(dev().readTimestamps(pool, 0, kDispatches + 1, ns));
+    ASSERT_TRUE(dev().readTimestamps(busy.pool, 0, kDispatches + 1, ns));
     const uint64_t total = ns[kDispatches] - ns[0];
     ASSERT_GT(total, 0u);
     for (uint32_t i = 1; i <= kDispatches; ++i) {
