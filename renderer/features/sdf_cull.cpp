@@ -146,11 +146,11 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
     struct Data {
         fg::BufferRef view, objects, counter, inRanges, inIndices, ranges, indices;
     };
-    // The fine level reads coarse lists: one invocation per tile, one workgroup per coarse tile.
-    const bool fine = in.ranges.isValid();
-    const rhi::ShaderDesc& cs = program::compute(fine ? program::Variant::Fine : program::Variant::Default);
+    // One invocation per tile, a workgroup per 8x8 tiles (at the fine level: per coarse tile).
+    static_assert(kCoarse == 8, "sdf_tile_cull.comp's workgroups are 8x8 tiles, one coarse tile");
+    const rhi::ShaderDesc& cs = program::compute();
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
-    const glm::uvec2 groups = fine ? (in.tiles + (kCoarse - 1)) / kCoarse : in.tiles;
+    const glm::uvec2 groups = (in.tiles + 7u) / 8u;
     const program::PushConstants push{
         glm::uvec4(in.count, uint32_t(in.capacity), in.tiles.x, in.tiles.y),
         glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f),

@@ -67,8 +67,8 @@ uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32
 // Adds "sdf_tile_cull_bounds" (compute: per object its world box, bounding sphere and a
 // conservative tile rectangle, 80 bytes each), "sdf_tile_cull_clear" (transfer: zeroes the slot
 // counters), "sdf_tile_cull_coarse" (compute: the same lists for 64x64 pixel tiles from every
-// object) and "sdf_tile_cull" (compute: one invocation per 8x8 tile, a group per coarse tile,
-// testing only its coarse tile's list) and publishes
+// object) and "sdf_tile_cull" (compute: per 8x8 tile, testing only its coarse tile's list; both
+// levels one invocation per tile) and publishes
 // SdfCullLists::primary (other members kept). Reads SceneBuffers::view and SdfSceneBuffers::objects;
 // desc.objects must describe the uploaded objects. The lists are marked as frame outputs (kept to the end of
 // the frame, never aliased after their last use) so that SceneRenderer::readBuffer can read them back and the

@@ -2,11 +2,10 @@
 // Two levels, one dispatch each: coarse tiles of 64x64 pixels list from all objects, then the 8x8
 // pixel tiles list from their coarse tile's list (a coarse tile on the "all objects" fallback hands
 // its tiles every object), so a tile tests the objects near it instead of all of them.
-// The coarse level runs one workgroup of 64 invocations per coarse tile (the objects split across
-// them, barriers between the steps); the fine level (variant FINE) one invocation per 8x8 tile,
-// one workgroup per coarse tile, each invocation over its coarse tile's whole list with no barrier
-// (on CPU devices a workgroup with barriers runs as coroutines: the workgroup-per-tile form cost
-// about 4x this one), the tile's lanes looping the same list in step. Per tile:
+// One invocation per tile of the level, a workgroup per 8x8 of them (at the fine level exactly one
+// coarse tile, so the tile's lanes loop over the same list in step), with no barrier: on CPU devices
+// a workgroup with barriers runs as coroutines, and the earlier workgroup-per-tile form (64
+// invocations splitting the objects) cost about 4x this one. Per tile:
 //  1. the tile frustum: the camera position and the rays through the tile's outer pixel corners
 //     (the ray construction of sdf_trace.comp: forward + ndc.x rayRight + ndc.y rayUp), bounded by
 //     the near and far planes (linear depth). The corners enclose every pixel-centre ray of the tile
@@ -18,18 +17,15 @@
 //     against the six planes with the projected-radius test. A box is dropped only when it lies
 //     wholly outside one plane (with a small relative margin): conservative, an object whose box
 //     any pixel ray of the tile crosses between near and far is never dropped;
-//  3. count + prefix sum, no fixed cap: the group counts its objects (shared atomic), one invocation
-//     reserves that many slots with an atomicAdd on the frame's counter (the prefix sum across
-//     tiles), then each chunk of 64 objects is written in ascending object order at the reserved
-//     base plus the chunk's running total and an exclusive prefix of the accepted flags (popcount
-//     of a shared 64-bit mask). The CPU sizes the indices from the scene (sdfTileListCapacity, an
+//  3. count + prefix sum, no fixed cap: the tile counts its objects, reserves that many slots with
+//     an atomicAdd on the frame's counter (the prefix sum across tiles), then writes them in
+//     ascending object order. The CPU sizes the indices from the scene (sdfTileListCapacity, an
 //     upper bound of this total, capped at kSdfTileMaxIndices); a reservation past that capacity -
 //     unreachable below the cap - writes (0, 0xffffffff), "all objects", and the consumer loops
 //     over every object.
-// Per-invocation loops run count / 64 iterations at the coarse level, the coarse list's length
-// (twice) at the fine level.
+// Loops per invocation: twice the candidates (every object at the coarse level, the coarse tile's
+// list at the fine level).
 #version 450
-#pragma penumbra_variants FINE
 layout(local_size_x = 64) in;
 
 #include "view.glsl"
@@ -111,9 +107,9 @@ uint g_first;
 bool g_direct;
 uint candidate(uint k) { return g_direct ? k : coarseIndices[g_first + k]; }
 
-#ifdef FINE
 void main() {
-    // Workgroup = coarse tile, invocation = one of its 8x8 tiles (a SIMD group: a row of them).
+    // Workgroup = 8x8 tiles of the level (at the fine level: one coarse tile, so every invocation
+    // loops over the same list; a SIMD group: a row of tiles), invocation = one tile.
     uint lid = gl_LocalInvocationIndex;
     uvec2 tile = gl_WorkGroupID.xy * 8u + uvec2(lid % 8u, lid / 8u);
     if (tile.x >= cull.counts.z || tile.y >= cull.counts.w) return;
@@ -121,11 +117,13 @@ void main() {
     uint count = cull.counts.x;
     g_first = 0u;
     g_direct = true;
-    uvec2 coarse = coarseRanges[gl_WorkGroupID.y * cull.level.w + gl_WorkGroupID.x];
-    if (coarse.y != kAllObjects) {
-        g_first = coarse.x;
-        count = coarse.y;
-        g_direct = false;
+    if (cull.level.w != 0u) {
+        uvec2 coarse = coarseRanges[(tile.y / 8u) * cull.level.w + tile.x / 8u];
+        if (coarse.y != kAllObjects) {
+            g_first = coarse.x;
+            count = coarse.y;
+            g_direct = false;
+        }
     }
     tilePlanes(tile);
     // 1. Count.
@@ -144,70 +142,3 @@ void main() {
         if (objectInTile(obj, tile)) indicesOut[slot++] = obj;
     }
 }
-#else
-shared uint s_count;
-shared uint s_base;
-shared bool s_overflow;
-shared uint s_mask[2];
-
-void main() {
-    uvec2 tile = gl_WorkGroupID.xy;
-    uint tileIndex = tile.y * cull.counts.z + tile.x;
-    uint lid = gl_LocalInvocationIndex;
-    uint count = cull.counts.x;
-    g_first = 0u;
-    g_direct = true;
-    if (cull.level.w != 0u) {
-        uvec2 coarse = coarseRanges[(tile.y / 8u) * cull.level.w + tile.x / 8u];
-        if (coarse.y != kAllObjects) {
-            g_first = coarse.x;
-            count = coarse.y;
-            g_direct = false;
-        }
-    }
-    tilePlanes(tile);
-    if (lid == 0u) s_count = 0u;
-    barrier();
-
-    // 1. Count; the first 32 chunks' results stay in a register mask for step 3.
-    uint mine = 0u, bits = 0u;
-    for (uint chunk = 0u; chunk * 64u < count; ++chunk) {
-        uint k = chunk * 64u + lid;
-        if (k < count && objectInTile(candidate(k), tile)) {
-            ++mine;
-            if (chunk < 32u) bits |= 1u << chunk;
-        }
-    }
-    if (mine > 0u) atomicAdd(s_count, mine);
-    barrier();
-
-    // 2. Reserve the tile's slots (the prefix sum across tiles).
-    if (lid == 0u) {
-        uint n = s_count;
-        uint base = n > 0u ? atomicAdd(reserved[cull.level.z], n) : 0u;
-        s_overflow = base > cull.counts.y || n > cull.counts.y - base;
-        s_base = base;
-        rangesOut[tileIndex] = s_overflow ? uvec2(0u, kAllObjects) : uvec2(base, n);
-    }
-    barrier();
-    if (s_overflow || s_count == 0u) return;  // uniform across the group
-
-    // 3. Write the indices in ascending order, chunk by chunk.
-    uint base = s_base, total = s_count, written = 0u;
-    for (uint chunk = 0u; chunk * 64u < count && written < total; ++chunk) {
-        uint k = chunk * 64u + lid;
-        uint obj = k < count ? candidate(k) : 0u;
-        bool accept = k < count && (chunk < 32u ? ((bits >> chunk) & 1u) != 0u : objectInTile(obj, tile));
-        if (lid < 2u) s_mask[lid] = 0u;
-        barrier();
-        if (accept) atomicOr(s_mask[lid >> 5u], 1u << (lid & 31u));
-        barrier();
-        uint lower = lid < 32u ? bitCount(s_mask[0] & ((1u << lid) - 1u))
-                               : bitCount(s_mask[0]) + bitCount(s_mask[1] & ((1u << (lid - 32u)) - 1u));
-        uint slot = written + lower;
-        if (accept && slot < total) indicesOut[base + slot] = obj;
-        written += bitCount(s_mask[0]) + bitCount(s_mask[1]);
-        barrier();  // every invocation has read the mask before the next chunk clears it
-    }
-}
-#endif
