@@ -31,27 +31,16 @@ fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size)
     return b.createBuffer(name, d);
 }
 
-}  // namespace
+// The counters' clear and sdf_tile_cull_effects_tiles.comp (each tile's surface, each object's
+// sphere and the largest field voxel: one invocation per tile); returns the buffers it wrote.
+struct EffectsTiles {
+    fg::BufferRef tiles, objects, counters;
+};
 
-uint64_t sdfEffectsListCapacity(uint64_t tiles, uint32_t lists, uint32_t objects) {
-    return std::max<uint64_t>(tiles * lists * std::min(objects, kSdfEffectsMeanList), 1);
-}
-
-void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
-    const bool ao = desc.ao.variant != scene::AoVariant::Off;
-    const uint32_t layers = desc.shadowLayers;
+EffectsTiles addEffectsTiles(FrameContext& fc, const EffectsDesc& desc, const SdfTileLists& lists) {
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
-    SdfTileLists lists;
-    lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
-    lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
     const uint64_t tiles = uint64_t(lists.tilesX) * lists.tilesY;
-    const uint32_t listCount = layers + (ao ? 1u : 0u);
-    // Capped below 2^32 - 16: the shader's reservations stay representable.
-    const uint64_t capacity =
-        std::min<uint64_t>(sdfEffectsListCapacity(tiles, listCount, sdfScene.objectCount), 0xfffffff0u);
-    const uint64_t indexBytes = capacity * 4;
-
     struct Clear {
         fg::BufferRef counters;
     };
@@ -65,8 +54,6 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ctx.cmd.fillBuffer(ctx.buffer(d.counters), 0, kCounterBytes, 0u);
         });
 
-    // Each tile's surface, each object's sphere and the largest field voxel
-    // (sdf_tile_cull_effects_tiles.comp): one invocation per tile.
     struct Tiles {
         SceneBuffers scene;
         SdfSceneBuffers sdf;
@@ -112,6 +99,31 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             ctx.cmd.pushConstants(&tilePush, sizeof(tilePush));
             ctx.cmd.dispatch(groupsX, groupsY);
         });
+
+    return {tileData.tiles, tileData.objects, tileData.counters};
+}
+
+}  // namespace
+
+uint64_t sdfEffectsListCapacity(uint64_t tiles, uint32_t lists, uint32_t objects) {
+    return std::max<uint64_t>(tiles * lists * std::min(objects, kSdfEffectsMeanList), 1);
+}
+
+void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
+    const bool ao = desc.ao.variant != scene::AoVariant::Off;
+    const uint32_t layers = desc.shadowLayers;
+    const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
+    SdfTileLists lists;
+    lists.tilesX = (fc.width + kSdfTileSize - 1) / kSdfTileSize;
+    lists.tilesY = (fc.height + kSdfTileSize - 1) / kSdfTileSize;
+    const uint64_t tiles = uint64_t(lists.tilesX) * lists.tilesY;
+    const uint32_t listCount = layers + (ao ? 1u : 0u);
+    // Capped below 2^32 - 16: the shader's reservations stay representable.
+    const uint64_t capacity =
+        std::min<uint64_t>(sdfEffectsListCapacity(tiles, listCount, sdfScene.objectCount), 0xfffffff0u);
+    const uint64_t indexBytes = capacity * 4;
+
+    const EffectsTiles tileData = addEffectsTiles(fc, desc, lists);
 
     // The lists (sdf_tile_cull_effects.comp): one invocation per tile and list, workgroup row y =
     // the list.
