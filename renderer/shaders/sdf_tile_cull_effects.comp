@@ -6,7 +6,8 @@
 // points, the pixel footprint on it and the rays' start offset; no surface -> the list is empty):
 //  1. per list (one per shadowed light, then AO), per casting object (params.y & 1), the object's
 //     world bounding sphere (its local box through `model`, Frobenius norm; unbounded objects are
-//     always kept; computed once per frame by sdf_tile_cull_effects_tiles.comp) against the region the effect's rays can reach from the tile's sphere:
+//     always kept; computed once per frame by sdf_tile_cull_effects_tiles.comp) against the
+//     region the effect's rays can reach from the tile's sphere:
 //       shadow, directional: the capsule from the tile sphere along the light direction up to the
 //         far plane (the march's tMax); point / sphere light: the capsule from the tile sphere to
 //         the light's position (its rays end on the light's sphere). The object's sphere is grown
@@ -23,7 +24,8 @@
 //     2 sum of list lengths, 3 lists of tiles with a surface (tests read them back); 4 the largest
 //     field voxel (float bits, written by sdf_tile_cull_effects_tiles.comp).
 // Loops per invocation: 2 x objects. No barrier: on CPU devices a workgroup with barriers runs as
-// coroutines, and one workgroup per tile with two busy invocations cost 4-5x this form.
+// coroutines; the earlier form (one workgroup per tile, its first invocations building the lists)
+// took 9.4 ms where this pass and its tiles pass take 0.9 ms on the 80-object benchmark scene.
 #version 450
 layout(local_size_x = 64) in;
 
@@ -57,7 +59,6 @@ layout(push_constant) uniform SdfTileCullEffects {
     vec4 params;   // x AO reach (maxDistance), y unused, z pixel footprint per unit distance, w far
 } cull;
 
-const uint kAoFlag = 1u;
 const uint kHardFlag = 2u;
 const uint kAllObjects = 0xffffffffu;
 

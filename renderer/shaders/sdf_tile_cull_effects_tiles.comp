@@ -1,9 +1,9 @@
 // sdf_tile_cull_effects_tiles: the per-tile half of the shadow and AO tile lists
 // (sdf_tile_cull_effects.comp builds the lists from it; renderer/features/sdf_effects_cull.h). One
 // invocation per 8x8 pixel tile of the full-resolution frame (a workgroup per 8x8 tiles) writes the
-// tile's surface: min / max linear depth of its pixels with depth > 0 (background pixels trace no shadow
-// or AO ray; no such pixel: radius -1, every list of the tile is empty), the bounding sphere of the
-// frustum slab between those depths (the 8 points of the rays through the tile's outer pixel
+// tile's surface: min / max linear depth of its pixels with depth > 0 (background pixels trace no
+// shadow or AO ray; no such pixel: radius -1, every list of the tile is empty), the bounding sphere
+// of the frustum slab between those depths (the 8 points of the rays through the tile's outer pixel
 // corners at min and max depth: every pixel-centre point lies in their hull), the largest pixel
 // footprint on it, and how far a ray's start can leave the surface (the shadows' sdfSurfaceBias: a
 // quarter pixel footprint; sdf_tile_cull_effects.comp raises it to 1.5 of the frame's largest field
@@ -38,7 +38,9 @@ struct EffectsObject {
 
 layout(set = 2, binding = 0) uniform sampler2D gbufferDepth;
 layout(set = 2, binding = 1, std430) writeonly buffer EffectsTiles { EffectsTile effectsTiles[]; };
-layout(set = 2, binding = 6, std430) writeonly buffer EffectsObjects { EffectsObject effectsObjects[]; };
+layout(set = 2, binding = 6, std430) writeonly buffer EffectsObjects {
+    EffectsObject effectsObjects[];
+};
 layout(set = 2, binding = 7, std430) buffer EffectsCullCounters { uint counters[]; };
 
 const uint kCastsShadows = 1u;  // GpuSdfObject::params.y (kSdfObjectCastsShadows)
