@@ -682,16 +682,19 @@ void VulkanCommandList::writeTimestamp(QueryPoolHandle pool, uint32_t index) {
     // pipeline barrier: an execution dependency (no memory access) before the timestamp charges
     // the work recorded before it to the interval before, and one after takes it here instead of
     // after the next command's work.
-    const bool flush = m_dev.m_barriersAroundTimestamps && !m_inRenderPass;
-    auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
+    if (!m_dev.m_barriersAroundTimestamps || m_inRenderPass) {
+        vkCmdWriteTimestamp2(m_cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, q->pool, index);
+        return;
+    }
     auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
     mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
     mb.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
+    auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
     dep.memoryBarrierCount = 1;
     dep.pMemoryBarriers = &mb;
-    if (flush) vkCmdPipelineBarrier2(m_cmd, &dep);
+    vkCmdPipelineBarrier2(m_cmd, &dep);
     vkCmdWriteTimestamp2(m_cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, q->pool, index);
-    if (flush) vkCmdPipelineBarrier2(m_cmd, &dep);
+    vkCmdPipelineBarrier2(m_cmd, &dep);
 }
 
 void VulkanCommandList::pushDebugGroup(std::string_view name) {
