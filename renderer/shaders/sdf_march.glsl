@@ -34,6 +34,9 @@ bool g_tileAll;
 uint g_evaluations;  // object distance evaluations of this pixel (kCountEvalsFlag)
 float g_nearestUncapped;  // sceneDistance's nearest object's distance without sdfFieldRootDistance
 float g_nearestRaw;  // and its raw value (a field's filtered value, no safety bound: the hit decision's)
+// Boxes ahead (culled march): the march point's ray parameter, the hit epsilon there, and the ray
+// distance from it to the nearest candidate box that the ray enters only more than an eps ahead.
+float g_marchT, g_marchEps, g_ahead;
 
 #ifdef SDF_MARCH_NO_TILES
 uint tileObject(uint i) { return i; }
@@ -87,19 +90,31 @@ float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out fl
 // `tFrom` (the point the last step started from) are skipped: the step from tFrom to here may have
 // crossed a box the current point is already past, and the over-relaxation check needs every
 // surface near that segment; an object whose box is farther than the best distance so far is not
-// evaluated. Without culling every traced object is evaluated.
+// evaluated. With culling (and the per-pixel list) an object whose box the ray enters more than an
+// eps ahead of p is not evaluated either: no surface of it lies on the ray before that entry, so
+// g_ahead, the ray distance to the nearest such entry, bounds how far the march may step along the
+// ray (it bounds `second` too, a bound along the ray only, for the near-miss step), while the
+// returned distance and its sphere (the over-relaxation check's backward radius) cover the objects
+// entered so far. Without culling every traced object is evaluated.
 float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
     nearest = 0xffffffffu;
     g_nearestUncapped = 3.0e38;
     g_nearestRaw = 3.0e38;
+    g_ahead = 3.0e38;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
     uint count = one ? 1u : candidateCount();
     for (uint i = 0u; i < count; ++i) {
         uint obj = one ? only : candidateObject(i, tFrom);
         if (obj == 0xffffffffu) continue;  // the ray had left this box for good
+        if (cull && !g_overflow && g_interval[i].x > g_marchT + g_marchEps) {
+            // The ray enters this box only ahead: none of its surface lies on the ray before the
+            // entry (at least an eps on, so that a march point just short of an entry moves on).
+            g_ahead = min(g_ahead, g_interval[i].x - g_marchT);
+            continue;
+        }
         vec3 pl = sdfToLocal(obj, p);
         if (cull) {
             float box = sdfBoxDistance(obj, pl);
@@ -122,6 +137,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
         }
     }
     if (one) second = d;  // the nearest everywhere in the cell: the others are at least as far
+    second = min(second, g_ahead);  // along the ray, the boxes ahead bound the others too
     return d;
 }
 
@@ -614,6 +630,9 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             nearest = 0xffffffffu;
             second = cached;
             d = cached;
+            g_marchT = t;
+            g_marchEps = eps;
+            g_ahead = 3.0e38;
             if (!cacheStep) d = sceneDistance(q, tFrom, safety, only, nearest, second);
             if (only != 0xffffffffu && d < eps) {
                 // The id field's object is a hit candidate: the hit decision starts from every
@@ -668,18 +687,23 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 candidate = true;
                 break;
             }
-            keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
-            prevRadius = radius;
+            if (nearest != 0xffffffffu)
+                keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
+            // Forward along the ray the point is safe up to its sphere and the nearest box entered
+            // only ahead (sceneDistance), whichever is nearer; the next point's sphere must reach
+            // back to that (the over-relaxation check above).
+            float forward = min(radius, g_ahead);
+            prevRadius = forward;
             prevT = t;
-            stepLength = omega * d;
+            stepLength = omega * forward;
             t += stepLength;
             ++steps;
-            if (t > tMax && stepLength > radius) {
+            if (t > tMax && stepLength > forward) {
                 // An over-relaxed step past the ray's end (the far plane, or a mesh's depth just
                 // behind a surface) is never checked by the spheres' overlap: the plain step
                 // instead, and no more over-relaxation.
-                t = prevT + radius;
-                stepLength = radius;
+                t = prevT + forward;
+                stepLength = forward;
                 omega = 1.0;
             }
         }
