@@ -11,7 +11,8 @@
 //     the frame has no lists); each one's local bounds box is intersected with the ray, objects it
 //     misses are never evaluated, the march starts at the first box entry, and an object is
 //     dropped once a step starts past its box or when its box is farther than the best distance
-//     so far. Up to kListSize objects are kept in a per-pixel list; a ray crossing more boxes
+//     so far; a box the ray enters only ahead is not evaluated, and the step may reach its entry.
+//     Up to kListSize objects are kept in a per-pixel list; a ray crossing more boxes
 //     evaluates the whole tile list (correct, slower). Without CULL every object [0, tracedCount)
 //     is evaluated at every step (mTec's "no optimization" baseline); the march interval (first
 //     box entry on, none when the ray crosses no box) is the same either way;
