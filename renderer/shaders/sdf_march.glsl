@@ -744,6 +744,10 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             // between the root tolerance and eps, was checked in the march loop).
             if (decision < 0) dNearPast = search.tPast;
             if (tj >= 0.0 && tj < dBest) {
+                // The first root, found by a later candidate farther than eps on: the candidates
+                // before it were passed over against eps only, so the scan starts over against the
+                // gap to this root (a grazing ray's far root must not hide a nearer surface).
+                if (dRoot == 0xffffffffu && decision >= 0 && tj - t > eps) decision = -1;
                 dBest = tj;
                 dRoot = search.obj;
             }
@@ -752,7 +756,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             for (++decision; decision < decisionCount; ++decision) {
                 if (trace.counts.w == 0u || steps >= stepLimit) break;
                 uint obj = candidateObject(uint(decision), t);
-                if (obj == nearest || obj == 0xffffffffu) continue;
+                if (obj == nearest || obj == dRoot || obj == 0xffffffffu) continue;
                 float gap = dRoot != 0xffffffffu ? dBest - t : eps;
                 if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
                 rootStart(search, obj, ro, rd, t, d, false, gap, min(dBest, tMax), dTol, eps, true);
