@@ -182,6 +182,9 @@ struct RootSearch {
     uint obj;
     float t0, gate, tEnd, tol, eps;
     bool countFirst;  // the first evaluation counts against the step limit
+    // A candidate searched against a root found already: its first root before tEnd, so a near
+    // miss does not end it; it goes on with plain steps from there.
+    bool untilEnd;
     float ta, sa, tp, sp, tb, sb, tr, voxel;
     bool bracket, prev, pending, plain, done;
     int side;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
@@ -281,6 +284,7 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
     s.tol = tol;
     s.eps = eps;
     s.countFirst = countFirst;
+    s.untilEnd = false;
     s.tPast = t0;
     s.sFirst = s0;
     s.ta = t0;
@@ -431,7 +435,17 @@ void rootTake(inout RootSearch s, float sr, inout uint steps) {
         // would need tr - ta >= sa + sr, the distance being 1-Lipschitz), else a's sphere, at
         // least half an eps on (the march's own least step near a surface).
         s.tPast = tr - s.ta < s.sa + sr ? tr : s.ta + max(s.sa, 0.5 * s.eps);
-        rootFinish(s, -1.0);  // past a minimum above the surface, or no root before tEnd
+        if (s.untilEnd && tr < s.tEnd && s.tPast == tr) {
+            // Past a minimum above the surface, but the object may come nearer again before the
+            // best root: on from tr with plain (safe) steps.
+            if (!s.plain) s.limit = 8 * int(trace.counts.w);
+            s.plain = true;
+            s.prev = false;
+            s.ta = tr;
+            s.sa = sr;
+        } else {
+            rootFinish(s, -1.0);  // past a minimum above the surface, or no root before tEnd
+        }
     } else {
         s.tp = s.ta;
         s.sp = s.sa;
@@ -721,6 +735,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         float dRaw = g_nearestRaw, dNearPast = t, dBest = 3.0e38;
         float dTol = max(kRootTolerance * eps, 1e-6 * t);
         uint dRoot = 0xffffffffu;
+        bool nearestDone = true;  // the candidate's own search needs no second one
         RootSearch search;
         rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
         for (;;) {
@@ -747,7 +762,12 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 // The first root, found by a later candidate farther than eps on: the candidates
                 // before it were passed over against eps only, so the scan starts over against the
                 // gap to this root (a grazing ray's far root must not hide a nearer surface).
-                if (dRoot == 0xffffffffu && decision >= 0 && tj - t > eps) decision = -1;
+                // The candidate's own search, ended at its near miss, is one of them: its object
+                // may come nearer again before this root.
+                if (dRoot == 0xffffffffu && decision >= 0 && tj - t > eps) {
+                    decision = -1;
+                    nearestDone = false;
+                }
                 dBest = tj;
                 dRoot = search.obj;
             }
@@ -756,10 +776,11 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             for (++decision; decision < decisionCount; ++decision) {
                 if (trace.counts.w == 0u || steps >= stepLimit) break;
                 uint obj = candidateObject(uint(decision), t);
-                if (obj == nearest || obj == dRoot || obj == 0xffffffffu) continue;
+                if ((obj == nearest && nearestDone) || obj == dRoot || obj == 0xffffffffu) continue;
                 float gap = dRoot != 0xffffffffu ? dBest - t : eps;
                 if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
                 rootStart(search, obj, ro, rd, t, d, false, gap, min(dBest, tMax), dTol, eps, true);
+                search.untilEnd = dRoot != 0xffffffffu;
                 started = true;
                 break;
             }

@@ -787,76 +787,92 @@ TEST_P(Stability, Case12_BadTransformsAreSkippedNonUniformIsConservative) {
 
 // ---- 13. a grazing far root must not hide a nearer surface ----------------------------------------------
 
-// A box C on a ground plane, and in front of it a thin rod (a box 0.02 deep, 0.02 high) that one row
-// of rays passes 0.0015 under while the ground is within the hit epsilon: the rod is the hit
+// A box C on a ground plane, and in front of it a thin bar (0.02 deep, 0.02 high) that one row of rays
+// passes 0.0015 under while the ground is within the hit epsilon: the bar's object is the hit
 // candidate, a near miss, and the ground's own search (it is within eps of the point) finds its root
-// far on, past C. The objects in the order C, rod, ground, so C comes before the ground in every
-// candidate list. The hit decision (sdf_march.glsl) used to test the candidates before the ground
-// against eps only and took the ground's far root behind C; it now starts the scan over against the
-// gap to a first root found by a later candidate. The ground enters the hit epsilon at a point t*
-// swept over five offsets in front of the rod (the camera height follows), so that the march meets
-// the rod as nearest while the ground is within eps. Criterion, acceleration none and culling: no
-// traced point behind the exact first surface (stability_util.h compareDepth, float slack 1e-5 t),
-// and every exact hit of C in the rod's row traced as C. Measured before the fix (Vulkan): without
-// acceleration all 16 C pixels of the row were the ground behind C at every offset; with culling 0
-// (its steps reach the rod elsewhere). After: 0 on both backends.
+// far on, past C. Two variants:
+//   rod: the bar is an object of its own, in the order C, rod, ground (C comes before the ground in
+//        every candidate list, so it had been passed over against eps only);
+//   bar: the bar is part of C (a union), no rod: C is the candidate, its own search ends at the
+//        bar's near miss, and C's box behind it was never searched again.
+// The hit decision (sdf_march.glsl) took the ground's far root behind C in both; it now starts the
+// scan over against the gap to a first root found by a later candidate, the candidate's own object
+// included, and such searches go on past a near miss up to the best root. The ground enters the
+// hit epsilon at a point t* swept over five offsets in front of the bar (the camera height
+// follows), so that the march meets the bar as nearest while the ground is within eps. Criterion,
+// acceleration none and culling: no traced point behind the exact first surface
+// (stability_util.h compareDepth, float slack 1e-5 t), and every exact hit of C in the bar's row
+// traced as C. Measured before the fix (Vulkan, at 3ddd5ed): rod, without acceleration all 16 C
+// pixels of the row were the ground behind C at every offset, with culling 0 (its steps reach the
+// rod elsewhere); bar, all 16 in both configurations. After: 0 in every variant, offset and
+// configuration, both backends.
 TEST_P(Stability, Case13_AGrazingFarRootDoesNotHideANearerSurface) {
     constexpr uint32_t w = 160, h = 90, row = 48;
-    const double zRod = 9.8, rodHalfDepth = 0.02, gap = 0.0015;
+    const double zBar = 9.8, barHalfDepth = 0.02, gap = 0.0015;
     const glm::dvec3 cC(0.0, 0.15, -10.4), cE(1.0, 0.15, 0.2);
     const double offsets[] = {0.005, 0.01, 0.02, 0.03, 0.04};
-    for (double offset : offsets) {
-        // The row's slope (drop per unit depth) and footprint from a level camera.
-        StabScene probe({0, 1, 0}, {0, 1, -1});
-        ecs::updateTransforms(probe.world);
-        const RefCamera pc(probe.world, probe.camera, w, h);
-        const glm::dvec3 d0 = pc.dir(w / 2, row);
-        const double slope = -d0.y, fp = pc.footprint(), len = glm::length(d0);
-        // At depth t* = front face - offset the ground is eps below the ray: y(t*) = eps(t*).
-        const double tStar = zRod - rodHalfDepth - offset;
-        const double yStar = presetEps(TraceQuality::Medium) * fp * tStar * len;
-        const double eye = yStar + slope * tStar;
-        const double yRod = eye - slope * zRod;  // the ray's height under the rod's centre
-        StabScene s({0, float(eye), 0}, {0, float(eye), -1}, 0.1f, 100.0f);
-        const glm::dvec3 rC(0.0, yRod + gap + 0.01, -zRod), rE(3.0, 0.01, rodHalfDepth);
-        const ecs::Entity c = s.shape(ShapeNode::box(cE), glm::vec3(cC));
-        const ecs::Entity rod = s.shape(ShapeNode::box(rE), glm::vec3(rC));
-        const ecs::Entity ground = s.shape(ShapeNode::plane({0, 1, 0}, 0.0), {0, 0, 0});
-        ecs::updateTransforms(s.world);
-        const RefCamera cam(s.world, s.camera, w, h);
-        auto exact = [&](const glm::dvec3& o, const glm::dvec3& d) {
-            Hit hc = rayBox(o, d, cC, cE, cam.nearPlane), hr = rayBox(o, d, rC, rE, cam.nearPlane),
-                hg = rayPlane(o, d, {0, 1, 0}, 0.0, cam.nearPlane);
-            hc.id = int(c.index);
-            hr.id = int(rod.index);
-            hg.id = int(ground.index);
-            Hit best = hc;
-            if (hr.s < best.s) best = hr;
-            if (hg.s < best.s) best = hg;
-            return best;
-        };
-        ASSERT_EQ(exact(cam.eye, cam.dir(w / 2, row)).id, int(c.index))
-            << "the row's ray passes under the rod";
-        SceneRenderer r(dev());
-        for (bool culling : {false, true}) {
-            FrameDesc fd = s.frame(w, h);
-            fd.settings.acceleration.culling = culling;
-            GBuffer g;
-            ASSERT_TRUE(renderAndRead(s, r, fd, g));
-            const DepthStats st =
-                compareDepth(g, cam, exact, 4.0 * presetEps(TraceQuality::Medium), 0.0, 0.9 * cam.farPlane);
-            size_t rowC = 0, rowCWrong = 0;
-            for (uint32_t x = 0; x < w; ++x) {
-                if (exact(cam.eye, cam.dir(x, row)).id != int(c.index)) continue;
-                ++rowC;
-                rowCWrong += g.id(g.at(x, row)) != int(c.index);
+    for (bool ownObject : {true, false}) {
+        for (double offset : offsets) {
+            // The row's slope (drop per unit depth) and footprint from a level camera.
+            StabScene probe({0, 1, 0}, {0, 1, -1});
+            ecs::updateTransforms(probe.world);
+            const RefCamera pc(probe.world, probe.camera, w, h);
+            const glm::dvec3 d0 = pc.dir(w / 2, row);
+            const double slope = -d0.y, fp = pc.footprint(), len = glm::length(d0);
+            // At depth t* = front face - offset the ground is eps below the ray: y(t*) = eps(t*).
+            const double tStar = zBar - barHalfDepth - offset;
+            const double yStar = presetEps(TraceQuality::Medium) * fp * tStar * len;
+            const double eye = yStar + slope * tStar;
+            const double yBar = eye - slope * zBar;  // the ray's height under the bar's centre
+            StabScene s({0, float(eye), 0}, {0, float(eye), -1}, 0.1f, 100.0f);
+            const glm::dvec3 bC(0.0, yBar + gap + 0.01, -zBar), bE(ownObject ? 3.0 : 1.0, 0.01, barHalfDepth);
+            const ecs::Entity c =
+                ownObject ? s.shape(ShapeNode::box(cE), glm::vec3(cC))
+                          : s.shape(ShapeNode::csg(sdf::CsgOp::Union, {ShapeNode::box(bE).placed(bC),
+                                                                       ShapeNode::box(cE).placed(cC)}),
+                                    {0, 0, 0});
+            const ecs::Entity bar = ownObject ? s.shape(ShapeNode::box(bE), glm::vec3(bC)) : c;
+            const ecs::Entity ground = s.shape(ShapeNode::plane({0, 1, 0}, 0.0), {0, 0, 0});
+            ecs::updateTransforms(s.world);
+            const RefCamera cam(s.world, s.camera, w, h);
+            auto exact = [&](const glm::dvec3& o, const glm::dvec3& d) {
+                Hit hc = rayBox(o, d, cC, cE, cam.nearPlane), hb = rayBox(o, d, bC, bE, cam.nearPlane),
+                    hg = rayPlane(o, d, {0, 1, 0}, 0.0, cam.nearPlane);
+                hc.id = int(c.index);
+                hb.id = int(bar.index);
+                hg.id = int(ground.index);
+                Hit best = hc;
+                if (hb.s < best.s) best = hb;
+                if (hg.s < best.s) best = hg;
+                return best;
+            };
+            const glm::dvec3 dRow = cam.dir(w / 2, row);
+            ASSERT_EQ(exact(cam.eye, dRow).id, int(c.index)) << "the row's ray passes under the bar";
+            ASSERT_LT(rayBox(cam.eye, dRow, cC, cE, cam.nearPlane).s,
+                      rayPlane(cam.eye, dRow, {0, 1, 0}, 0.0, 0.0).s);
+            SceneRenderer r(dev());
+            for (bool culling : {false, true}) {
+                FrameDesc fd = s.frame(w, h);
+                fd.settings.acceleration.culling = culling;
+                GBuffer g;
+                ASSERT_TRUE(renderAndRead(s, r, fd, g));
+                const DepthStats st = compareDepth(g, cam, exact, 4.0 * presetEps(TraceQuality::Medium), 0.0,
+                                                   0.9 * cam.farPlane);
+                size_t rowC = 0, rowCWrong = 0;
+                for (uint32_t x = 0; x < w; ++x) {
+                    const glm::dvec3 dx = cam.dir(x, row);
+                    if (rayBox(cam.eye, dx, cC, cE, cam.nearPlane).s != exact(cam.eye, dx).s) continue;
+                    ++rowC;
+                    rowCWrong += g.id(g.at(x, row)) != int(c.index);
+                }
+                summary("13 grazing far root", backend(),
+                        "%s, t* %.3f before it, %s: %zu behind (0), row %u: %zu exact C px, %zu not C (0)",
+                        ownObject ? "rod" : "bar", offset, culling ? "culling" : "none   ", st.behind, row,
+                        rowC, rowCWrong);
+                EXPECT_GT(rowC, 5u);
+                EXPECT_EQ(st.behind, 0u) << "traced points behind the exact first surface";
+                EXPECT_EQ(rowCWrong, 0u) << "row " << row << ": C hidden by a farther root";
             }
-            summary("13 grazing far root", backend(),
-                    "t* %.3f before the rod, %s: %zu behind (0), row %u: %zu exact C px, %zu not C (0)",
-                    offset, culling ? "culling" : "none   ", st.behind, row, rowC, rowCWrong);
-            EXPECT_GT(rowC, 5u);
-            EXPECT_EQ(st.behind, 0u) << "traced points behind the exact first surface";
-            EXPECT_EQ(rowCWrong, 0u) << "row " << row << ": C hidden by a farther root";
         }
     }
 }
