@@ -727,7 +727,10 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         // candidate's object `nearest`, then of every candidate (index decision) whose distance
         // here is below the gap to the best root so far (below eps while there is none): the
         // earliest root is the hit, on its object; none is a near miss and the march goes on. A
-        // field's safe distance lies up to its interpolation bound below the interpolated one, so
+        // search made against a root found already goes on past its object's near misses up to
+        // that root; when the first root comes from a later candidate more than eps on, the scan
+        // starts over against its gap, the candidate's own object included (a grazing ray's far
+        // root must not hide a nearer surface; docs/ACCURACY.md). A field's safe distance lies up to its interpolation bound below the interpolated one, so
         // the raw value decides; the candidate's raw value here is known from the step's
         // evaluation (the same value the search's own first evaluation would take).
         int decision = -1;
