@@ -186,6 +186,19 @@ VkImageLayout layoutFor(Access a, bool isDepth, bool separateDepthLayouts) {
     return VK_IMAGE_LAYOUT_GENERAL;
 }
 
+void cmdMemoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStages, VkAccessFlags2 srcAccess,
+                      VkPipelineStageFlags2 dstStages, VkAccessFlags2 dstAccess) {
+    auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
+    mb.srcStageMask = srcStages;
+    mb.srcAccessMask = srcAccess;
+    mb.dstStageMask = dstStages;
+    mb.dstAccessMask = dstAccess;
+    auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
+    dep.memoryBarrierCount = 1;
+    dep.pMemoryBarriers = &mb;
+    vkCmdPipelineBarrier2(cmd, &dep);
+}
+
 VkCompareOp toVkCompare(CompareOp op) {
     switch (op) {
         case CompareOp::Never:

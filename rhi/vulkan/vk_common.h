@@ -37,6 +37,10 @@ VkImageLayout layoutFor(Access a, bool isDepth, bool separateDepthLayouts);
 // The layout that Access::ShaderSampled maps to (used by sampled-texture descriptors).
 inline constexpr VkImageLayout kSampledLayout = VK_IMAGE_LAYOUT_READ_ONLY_OPTIMAL;
 
+// Records one global memory dependency (no resource, no layout transition) into `cmd`.
+void cmdMemoryBarrier(VkCommandBuffer cmd, VkPipelineStageFlags2 srcStages, VkAccessFlags2 srcAccess,
+                      VkPipelineStageFlags2 dstStages, VkAccessFlags2 dstAccess);
+
 VkCompareOp toVkCompare(CompareOp op);
 VkBlendFactor toVkBlendFactor(BlendFactor f);
 VkBlendOp toVkBlendOp(BlendOp op);

@@ -674,15 +674,9 @@ uint64_t VulkanDevice::submitBatch(std::span<const VkCommandBuffer> cbs, std::sp
     std::vector<VkCommandBuffer> all;
     if (m_uploadCmd) {
         // Make the uploads visible to everything that follows on the queue.
-        auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
-        mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-        mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-        mb.dstStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        mb.dstAccessMask = VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT;
-        auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
-        dep.memoryBarrierCount = 1;
-        dep.pMemoryBarriers = &mb;
-        vkCmdPipelineBarrier2(m_uploadCmd, &dep);
+        cmdMemoryBarrier(m_uploadCmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT,
+                         VK_ACCESS_2_MEMORY_READ_BIT | VK_ACCESS_2_MEMORY_WRITE_BIT);
         check(vkEndCommandBuffer(m_uploadCmd), "vkEndCommandBuffer(uploads)");
         all.push_back(m_uploadCmd);
     }

@@ -1141,15 +1141,9 @@ VkCommandBuffer VulkanDevice::uploadCommands() {
     if (!m_uploadCmd) return VK_NULL_HANDLE;
     setName(VK_OBJECT_TYPE_COMMAND_BUFFER, uint64_t(m_uploadCmd), "penumbra uploads");
     // Earlier submissions may still read or write what the uploads overwrite.
-    auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
-    mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-    mb.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
-    mb.dstStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-    mb.dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT;
-    auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
-    dep.memoryBarrierCount = 1;
-    dep.pMemoryBarriers = &mb;
-    vkCmdPipelineBarrier2(m_uploadCmd, &dep);
+    cmdMemoryBarrier(m_uploadCmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                     VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT,
+                     VK_ACCESS_2_TRANSFER_READ_BIT | VK_ACCESS_2_TRANSFER_WRITE_BIT);
     return m_uploadCmd;
 }
 
@@ -1358,22 +1352,12 @@ bool VulkanDevice::readBuffer(BufferHandle src, uint64_t offset, uint64_t size, 
     VkCommandBuffer cmd = beginInternalCommands();
     bool ok = cmd != VK_NULL_HANDLE;
     if (ok) {
-        auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
-        mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT;
-        mb.srcAccessMask = VK_ACCESS_2_MEMORY_WRITE_BIT;
-        mb.dstStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-        mb.dstAccessMask = VK_ACCESS_2_TRANSFER_READ_BIT;
-        auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
-        dep.memoryBarrierCount = 1;
-        dep.pMemoryBarriers = &mb;
-        vkCmdPipelineBarrier2(cmd, &dep);
+        cmdMemoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_COMMANDS_BIT, VK_ACCESS_2_MEMORY_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_READ_BIT);
         VkBufferCopy region{offset, 0, size};
         vkCmdCopyBuffer(cmd, b->buffer, staging, 1, &region);
-        mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-        mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-        mb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-        mb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-        vkCmdPipelineBarrier2(cmd, &dep);
+        cmdMemoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
         ok = submitInternalAndWait(cmd);
     }
     if (ok) {
@@ -1428,15 +1412,8 @@ bool VulkanDevice::readTexture(TextureHandle src, TextureSubresource sub, Access
             recordImageBarrier(cmd, *t, Access::CopySrc, currentAccess, false, &one);
         else
             t->states.set(one, Access::None);  // contents were undefined; later barriers start from UNDEFINED
-        auto mb = vkInit<VkMemoryBarrier2>(VK_STRUCTURE_TYPE_MEMORY_BARRIER_2);
-        mb.srcStageMask = VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT;
-        mb.srcAccessMask = VK_ACCESS_2_TRANSFER_WRITE_BIT;
-        mb.dstStageMask = VK_PIPELINE_STAGE_2_HOST_BIT;
-        mb.dstAccessMask = VK_ACCESS_2_HOST_READ_BIT;
-        auto dep = vkInit<VkDependencyInfo>(VK_STRUCTURE_TYPE_DEPENDENCY_INFO);
-        dep.memoryBarrierCount = 1;
-        dep.pMemoryBarriers = &mb;
-        vkCmdPipelineBarrier2(cmd, &dep);
+        cmdMemoryBarrier(cmd, VK_PIPELINE_STAGE_2_ALL_TRANSFER_BIT, VK_ACCESS_2_TRANSFER_WRITE_BIT,
+                         VK_PIPELINE_STAGE_2_HOST_BIT, VK_ACCESS_2_HOST_READ_BIT);
         ok = submitInternalAndWait(cmd);
     }
     if (ok) {
