@@ -86,16 +86,17 @@ float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out fl
 // The march's distance to the nearest object at world point p (safe distances: fields with their
 // safety bound and rootBound); `nearest` is its object, `second` a lower bound of the other
 // objects' distances. `only` (the id field's object for p's cell, else 0xffffffff) is evaluated
-// alone: it is the nearest object everywhere around p and bounds the others too. With culling, objects whose box the ray had left before
-// `tFrom` (the point the last step started from) are skipped: the step from tFrom to here may have
-// crossed a box the current point is already past, and the over-relaxation check needs every
-// surface near that segment; an object whose box is farther than the best distance so far is not
-// evaluated. With culling (and the per-pixel list) an object whose box the ray enters more than an
-// eps ahead of p is not evaluated either: no surface of it lies on the ray before that entry, so
-// g_ahead, the ray distance to the nearest such entry, bounds how far the march may step along the
-// ray (it bounds `second` too, a bound along the ray only, for the near-miss step), while the
-// returned distance and its sphere (the over-relaxation check's backward radius) cover the objects
-// entered so far. Without culling every traced object is evaluated.
+// alone: it is the nearest object everywhere around p and bounds the others too. With culling,
+// objects whose box the ray had left before `tFrom` (the point the last step started from) are
+// skipped: the step from tFrom to here may have crossed a box the current point is already past,
+// and the over-relaxation check needs every surface near that segment; an object whose box is
+// farther than the best distance so far is not evaluated. With culling (and the per-pixel list) an
+// object whose box the ray enters more than an eps ahead of p is not evaluated either: no surface
+// of it lies on the ray before that entry, so g_ahead, the ray distance to the nearest such entry,
+// bounds how far the march may step along the ray (it bounds `second` too, a bound along the ray
+// only, for the near-miss step), while the returned distance and its sphere (the over-relaxation
+// check's backward radius) cover the objects entered so far. Without culling every traced object
+// is evaluated.
 float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
@@ -730,9 +731,10 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         // search made against a root found already goes on past its object's near misses up to
         // that root; when the first root comes from a later candidate more than eps on, the scan
         // starts over against its gap, the candidate's own object included (a grazing ray's far
-        // root must not hide a nearer surface; docs/ACCURACY.md). A field's safe distance lies up to its interpolation bound below the interpolated one, so
-        // the raw value decides; the candidate's raw value here is known from the step's
-        // evaluation (the same value the search's own first evaluation would take).
+        // root must not hide a nearer surface; docs/ACCURACY.md). A field's safe distance lies up
+        // to its interpolation bound below the interpolated one, so the raw value decides; the
+        // candidate's raw value here is known from the step's evaluation (the same value the
+        // search's own first evaluation would take).
         int decision = -1;
         int decisionCount = int(candidateCount());
         float dRaw = g_nearestRaw, dNearPast = t, dBest = 3.0e38;
