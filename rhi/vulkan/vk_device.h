@@ -269,7 +269,18 @@ private:
     // The descriptor set of `g` matching the current layouts of its sampled textures.
     VkDescriptorSet descriptorSetFor(BindGroupRes& g);
     void freeBindGroup(const BindGroupRes& g);
+    bool textureImageUsage(const TextureDesc& desc, VkFormat format, const std::string& what,
+                           VkImageUsageFlags& usage);
     bool buildPipelineLayout(std::span<const ShaderRes* const> shaders, PipelineRes& out);
+    // createGraphicsPipeline's vertex input (every location the vertex shader reads provided, each
+    // attribute format usable) and colour targets (formats usable as attachments, blend states);
+    // false, with the error logged under `what`, when the description is invalid.
+    bool graphicsVertexInput(const GraphicsPipelineDesc& desc, const ShaderRes& vs, const std::string& what,
+                             std::vector<VkVertexInputBindingDescription>& bindings,
+                             std::vector<VkVertexInputAttributeDescription>& attributes);
+    bool graphicsColorTargets(const GraphicsPipelineDesc& desc, const std::string& what,
+                              std::vector<VkFormat>& colorFormats,
+                              std::vector<VkPipelineColorBlendAttachmentState>& blends);
     // Records a barrier before -> after over `range` (resolved; default: the whole image) and sets
     // the state of those subresources to `after`. `waitForAllWrites` widens the source scope to
     // every earlier write (readback, present blits).

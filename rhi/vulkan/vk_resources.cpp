@@ -202,6 +202,48 @@ void VulkanDevice::releaseTexture(TextureRes& t) {
     t.image = VK_NULL_HANDLE;
 }
 
+// createTexture's image usage: the requested usages, each checked against the format's features, plus
+// transfers and sampling where the format allows them. False, with the error logged under `what`,
+// when a requested usage is unsupported.
+bool VulkanDevice::textureImageUsage(const TextureDesc& desc, VkFormat format, const std::string& what,
+                                     VkImageUsageFlags& usage) {
+    const FormatInfo& fi = formatInfo(desc.format);
+    VkFormatProperties fp;
+    vkGetPhysicalDeviceFormatProperties(m_physical, format, &fp);
+    const VkFormatFeatureFlags feats = fp.optimalTilingFeatures;
+    struct Need {
+        TextureUsage usage;
+        VkFormatFeatureFlags feature;
+        VkImageUsageFlags imageUsage;
+    };
+    const Need needs[] = {
+        {TextureUsage::Sampled, VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT, VK_IMAGE_USAGE_SAMPLED_BIT},
+        {TextureUsage::Storage, VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT, VK_IMAGE_USAGE_STORAGE_BIT},
+        {TextureUsage::ColorTarget, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT,
+         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT},
+        {TextureUsage::DepthTarget, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT,
+         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT},
+        {TextureUsage::CopySrc, VK_FORMAT_FEATURE_TRANSFER_SRC_BIT, VK_IMAGE_USAGE_TRANSFER_SRC_BIT},
+        {TextureUsage::CopyDst, VK_FORMAT_FEATURE_TRANSFER_DST_BIT, VK_IMAGE_USAGE_TRANSFER_DST_BIT},
+    };
+    usage = 0;
+    for (const Need& n : needs) {
+        if (!any(desc.usage & n.usage)) continue;
+        if (!(feats & n.feature)) {
+            logError(what + ": format " + fi.name + " does not support " + usageName(n.usage) +
+                     " usage on this device");
+            return false;
+        }
+        usage |= n.imageUsage;
+    }
+    // Uploads and readback work on every texture; sampling-capable formats also get SAMPLED so
+    // that writeTexture() can leave any texture in the ShaderSampled (read-only) layout.
+    if (feats & VK_FORMAT_FEATURE_TRANSFER_SRC_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
+    if (feats & VK_FORMAT_FEATURE_TRANSFER_DST_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
+    if (feats & VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT) usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
+    return true;
+}
+
 TextureHandle VulkanDevice::createTexture(const TextureDesc& desc) {
     const std::string what = "createTexture" + quoted(desc.debugName);
     const FormatInfo& fi = formatInfo(desc.format);
@@ -242,40 +284,8 @@ TextureHandle VulkanDevice::createTexture(const TextureDesc& desc) {
         return {};
     }
 
-    // Format features for the requested usage.
-    VkFormatProperties fp;
-    vkGetPhysicalDeviceFormatProperties(m_physical, format, &fp);
-    const VkFormatFeatureFlags feats = fp.optimalTilingFeatures;
-    struct Need {
-        TextureUsage usage;
-        VkFormatFeatureFlags feature;
-        VkImageUsageFlags imageUsage;
-    };
-    const Need needs[] = {
-        {TextureUsage::Sampled, VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT, VK_IMAGE_USAGE_SAMPLED_BIT},
-        {TextureUsage::Storage, VK_FORMAT_FEATURE_STORAGE_IMAGE_BIT, VK_IMAGE_USAGE_STORAGE_BIT},
-        {TextureUsage::ColorTarget, VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT,
-         VK_IMAGE_USAGE_COLOR_ATTACHMENT_BIT},
-        {TextureUsage::DepthTarget, VK_FORMAT_FEATURE_DEPTH_STENCIL_ATTACHMENT_BIT,
-         VK_IMAGE_USAGE_DEPTH_STENCIL_ATTACHMENT_BIT},
-        {TextureUsage::CopySrc, VK_FORMAT_FEATURE_TRANSFER_SRC_BIT, VK_IMAGE_USAGE_TRANSFER_SRC_BIT},
-        {TextureUsage::CopyDst, VK_FORMAT_FEATURE_TRANSFER_DST_BIT, VK_IMAGE_USAGE_TRANSFER_DST_BIT},
-    };
     VkImageUsageFlags usage = 0;
-    for (const Need& n : needs) {
-        if (!any(desc.usage & n.usage)) continue;
-        if (!(feats & n.feature)) {
-            logError(what + ": format " + fi.name + " does not support " + usageName(n.usage) +
-                     " usage on this device");
-            return {};
-        }
-        usage |= n.imageUsage;
-    }
-    // Uploads and readback work on every texture; sampling-capable formats also get SAMPLED so
-    // that writeTexture() can leave any texture in the ShaderSampled (read-only) layout.
-    if (feats & VK_FORMAT_FEATURE_TRANSFER_SRC_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_SRC_BIT;
-    if (feats & VK_FORMAT_FEATURE_TRANSFER_DST_BIT) usage |= VK_IMAGE_USAGE_TRANSFER_DST_BIT;
-    if (feats & VK_FORMAT_FEATURE_SAMPLED_IMAGE_BIT) usage |= VK_IMAGE_USAGE_SAMPLED_BIT;
+    if (!textureImageUsage(desc, format, what, usage)) return {};
 
     auto info = vkInit<VkImageCreateInfo>(VK_STRUCTURE_TYPE_IMAGE_CREATE_INFO);
     info.imageType = is3D ? VK_IMAGE_TYPE_3D : VK_IMAGE_TYPE_2D;
@@ -561,6 +571,83 @@ PipelineHandle VulkanDevice::createComputePipeline(const ComputePipelineDesc& de
     return h;
 }
 
+bool VulkanDevice::graphicsVertexInput(const GraphicsPipelineDesc& desc, const ShaderRes& vs,
+                                       const std::string& what,
+                                       std::vector<VkVertexInputBindingDescription>& bindings,
+                                       std::vector<VkVertexInputAttributeDescription>& attributes) {
+    for (uint32_t i = 0; i < desc.vertexBuffers.size(); ++i)
+        bindings.push_back({i, desc.vertexBuffers[i].stride,
+                            desc.vertexBuffers[i].perInstance ? VK_VERTEX_INPUT_RATE_INSTANCE
+                                                              : VK_VERTEX_INPUT_RATE_VERTEX});
+    for (const VertexAttribute& a : desc.vertexAttributes) {
+        if (a.bufferSlot >= desc.vertexBuffers.size()) {
+            logError(what + ": vertex attribute at location " + std::to_string(a.location) +
+                     " uses buffer slot " + std::to_string(a.bufferSlot) + " but only " +
+                     std::to_string(desc.vertexBuffers.size()) + " vertex buffer layout(s) are given");
+            return false;
+        }
+        VkFormat f = toVkFormat(a.format);
+        VkFormatProperties fp;
+        vkGetPhysicalDeviceFormatProperties(m_physical, f, &fp);
+        if (f == VK_FORMAT_UNDEFINED || !(fp.bufferFeatures & VK_FORMAT_FEATURE_VERTEX_BUFFER_BIT)) {
+            logError(what + ": format " + formatInfo(a.format).name + " cannot be a vertex attribute");
+            return false;
+        }
+        attributes.push_back({a.location, a.bufferSlot, f, a.offset});
+    }
+    for (const VertexInputReflection& in : vs.vertexInputs) {
+        bool found = std::any_of(desc.vertexAttributes.begin(), desc.vertexAttributes.end(),
+                                 [&](const VertexAttribute& a) { return a.location == in.location; });
+        if (!found) {
+            logError(what + ": the vertex shader reads location " + std::to_string(in.location) +
+                     " but no vertex attribute provides it");
+            return false;
+        }
+    }
+    return true;
+}
+
+bool VulkanDevice::graphicsColorTargets(const GraphicsPipelineDesc& desc, const std::string& what,
+                                        std::vector<VkFormat>& colorFormats,
+                                        std::vector<VkPipelineColorBlendAttachmentState>& blends) {
+    for (Format f : desc.colorFormats) {
+        VkFormat vf = toVkFormat(f);
+        VkFormatProperties fp;
+        vkGetPhysicalDeviceFormatProperties(m_physical, vf, &fp);
+        if (vf == VK_FORMAT_UNDEFINED ||
+            !(fp.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT)) {
+            logError(what + ": format " + formatInfo(f).name + " cannot be a colour target");
+            return false;
+        }
+        colorFormats.push_back(vf);
+    }
+    for (size_t i = 0; i < desc.colorFormats.size(); ++i) {
+        VkPipelineColorBlendAttachmentState s{};
+        s.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
+                           VK_COLOR_COMPONENT_A_BIT;
+        if (!desc.blend.empty() && desc.blend[i].enable) {
+            const BlendState& b = desc.blend[i];
+            if (formatInfo(desc.colorFormats[i]).isInteger) {
+                logError(what + ": blending enabled on integer colour target " + std::to_string(i));
+                return false;
+            }
+            s.blendEnable = VK_TRUE;
+            s.srcColorBlendFactor = toVkBlendFactor(b.srcColor);
+            s.dstColorBlendFactor = toVkBlendFactor(b.dstColor);
+            s.colorBlendOp = toVkBlendOp(b.colorOp);
+            s.srcAlphaBlendFactor = toVkBlendFactor(b.srcAlpha);
+            s.dstAlphaBlendFactor = toVkBlendFactor(b.dstAlpha);
+            s.alphaBlendOp = toVkBlendOp(b.alphaOp);
+        }
+        if (!blends.empty() && !m_independentBlend && std::memcmp(&blends[0], &s, sizeof s) != 0) {
+            logError(what + ": different blend states per colour target need the independentBlend feature");
+            return false;
+        }
+        blends.push_back(s);
+    }
+    return true;
+}
+
 PipelineHandle VulkanDevice::createGraphicsPipeline(const GraphicsPipelineDesc& desc) {
     const std::string what = "createGraphicsPipeline" + quoted(desc.debugName);
     const ShaderRes* vs = m_shaders.get(desc.vertexShader);
@@ -597,76 +684,12 @@ PipelineHandle VulkanDevice::createGraphicsPipeline(const GraphicsPipelineDesc& 
         return {};
     }
 
-    // Vertex input.
     std::vector<VkVertexInputBindingDescription> bindings;
-    for (uint32_t i = 0; i < desc.vertexBuffers.size(); ++i)
-        bindings.push_back({i, desc.vertexBuffers[i].stride,
-                            desc.vertexBuffers[i].perInstance ? VK_VERTEX_INPUT_RATE_INSTANCE
-                                                              : VK_VERTEX_INPUT_RATE_VERTEX});
     std::vector<VkVertexInputAttributeDescription> attributes;
-    for (const VertexAttribute& a : desc.vertexAttributes) {
-        if (a.bufferSlot >= desc.vertexBuffers.size()) {
-            logError(what + ": vertex attribute at location " + std::to_string(a.location) +
-                     " uses buffer slot " + std::to_string(a.bufferSlot) + " but only " +
-                     std::to_string(desc.vertexBuffers.size()) + " vertex buffer layout(s) are given");
-            return {};
-        }
-        VkFormat f = toVkFormat(a.format);
-        VkFormatProperties fp;
-        vkGetPhysicalDeviceFormatProperties(m_physical, f, &fp);
-        if (f == VK_FORMAT_UNDEFINED || !(fp.bufferFeatures & VK_FORMAT_FEATURE_VERTEX_BUFFER_BIT)) {
-            logError(what + ": format " + formatInfo(a.format).name + " cannot be a vertex attribute");
-            return {};
-        }
-        attributes.push_back({a.location, a.bufferSlot, f, a.offset});
-    }
-    for (const VertexInputReflection& in : vs->vertexInputs) {
-        bool found = std::any_of(desc.vertexAttributes.begin(), desc.vertexAttributes.end(),
-                                 [&](const VertexAttribute& a) { return a.location == in.location; });
-        if (!found) {
-            logError(what + ": the vertex shader reads location " + std::to_string(in.location) +
-                     " but no vertex attribute provides it");
-            return {};
-        }
-    }
-
+    if (!graphicsVertexInput(desc, *vs, what, bindings, attributes)) return {};
     std::vector<VkFormat> colorFormats;
-    for (Format f : desc.colorFormats) {
-        VkFormat vf = toVkFormat(f);
-        VkFormatProperties fp;
-        vkGetPhysicalDeviceFormatProperties(m_physical, vf, &fp);
-        if (vf == VK_FORMAT_UNDEFINED ||
-            !(fp.optimalTilingFeatures & VK_FORMAT_FEATURE_COLOR_ATTACHMENT_BIT)) {
-            logError(what + ": format " + formatInfo(f).name + " cannot be a colour target");
-            return {};
-        }
-        colorFormats.push_back(vf);
-    }
     std::vector<VkPipelineColorBlendAttachmentState> blends;
-    for (size_t i = 0; i < desc.colorFormats.size(); ++i) {
-        VkPipelineColorBlendAttachmentState s{};
-        s.colorWriteMask = VK_COLOR_COMPONENT_R_BIT | VK_COLOR_COMPONENT_G_BIT | VK_COLOR_COMPONENT_B_BIT |
-                           VK_COLOR_COMPONENT_A_BIT;
-        if (!desc.blend.empty() && desc.blend[i].enable) {
-            const BlendState& b = desc.blend[i];
-            if (formatInfo(desc.colorFormats[i]).isInteger) {
-                logError(what + ": blending enabled on integer colour target " + std::to_string(i));
-                return {};
-            }
-            s.blendEnable = VK_TRUE;
-            s.srcColorBlendFactor = toVkBlendFactor(b.srcColor);
-            s.dstColorBlendFactor = toVkBlendFactor(b.dstColor);
-            s.colorBlendOp = toVkBlendOp(b.colorOp);
-            s.srcAlphaBlendFactor = toVkBlendFactor(b.srcAlpha);
-            s.dstAlphaBlendFactor = toVkBlendFactor(b.dstAlpha);
-            s.alphaBlendOp = toVkBlendOp(b.alphaOp);
-        }
-        if (!blends.empty() && !m_independentBlend && std::memcmp(&blends[0], &s, sizeof s) != 0) {
-            logError(what + ": different blend states per colour target need the independentBlend feature");
-            return {};
-        }
-        blends.push_back(s);
-    }
+    if (!graphicsColorTargets(desc, what, colorFormats, blends)) return {};
 
     PipelineRes p;
     p.name = desc.debugName.empty() ? vs->name : desc.debugName;
