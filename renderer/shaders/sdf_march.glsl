@@ -58,6 +58,18 @@ uint candidateObject(uint i, float tFrom) {
     return tFrom > g_interval[i].y ? 0xffffffffu : g_list[i];
 }
 
+// Whether the ray's part (t, t + gap) may cross the box of candidate i (object obj): the hit
+// decision's scan searches no other object whose box the ray misses, has left, or enters only
+// after t + gap (the same ray/box interval with culling and without: the per-pixel list's, or
+// computed here). Every root lies in its object's box, so this saves only evaluations; with it,
+// the scan's skip by the march's bound `second` (which includes the boxes ahead along the ray)
+// changes no step count.
+bool candidateCrossed(uint i, uint obj, vec3 ro, vec3 rd, float t, float gap) {
+    bool list = (trace.accel.x & kCullFlag) != 0u && !g_overflow;
+    vec2 iv = list ? g_interval[i] : sdfRayInterval(obj, ro, rd);
+    return iv.x <= iv.y && iv.y >= t && iv.x - t < gap;
+}
+
 // An object's local distance for the march (sdfLocalDistance; the hit decision evaluates with
 // fieldSafety 0 and rootBound false: a field's raw value). With rootBound (a march step, while the
 // hit decision searches: trace.counts.w > 0) a field's value is also at most sdfFieldRootDistance,
@@ -143,24 +155,25 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 }
 
 // The hit decision for one object (RootSearch, rootStart / rootNext / rootTake): the first root of
-// its raw distance (an interpolated field without the safety bound) along the ray after t0, where it
-// is s0, before tEnd; -1 when there is none (a near miss, or no root before tEnd). Every object is
-// searched on its own, so the result does not depend on where the march's samples landed (culling,
-// the world cache and over-relaxation all move them), and where surfaces touch (a box standing on
-// the floor) the ray's first surface wins: the union's distance is near zero all along a contact
-// plane, its own roots are not. Steps: the secant root estimate through the previous point while
-// the distance falls (exact for a plane at any angle, where plain steps crawl at grazing angles;
-// short of the root where the distance is convex), else a plain step; a point below zero brackets
-// the root and regula falsi closes the bracket (a bisection when the far end moved twice).
-// Converged: a point at most tol above the surface, or a bracket narrower than 1e-5 t (its outer
-// end). The distance growing again without a root is a near miss (a ray that passes within eps of a
-// silhouette is not widened onto it; tPast: a point the object has no root before) — but only where
-// the last step cannot have passed a root: a secant step beyond the previous point's sphere that
-// lands where the distance grew with the two spheres not overlapping is discarded, and the search
-// goes on from the previous point with plain steps only. So a thin sliver of the object (a grazing
-// ray clipping a silhouette, a field's concave cell) is found whatever point the search started
-// from; plain steps crawl along a grazing ray, so such a search may take eight times the
-// refineSteps evaluations. Every evaluation counts against the step limit; a search that the limit
+// its raw distance (an interpolated field without the safety bound) along the ray after t0, where
+// it is s0, before tEnd; -1 when there is none (a near miss, or no root before tEnd). Every object
+// is searched on its own, so the result does not depend on where the march's samples landed
+// (culling, the world cache and over-relaxation all move them), and where surfaces touch (a box
+// standing on the floor) the ray's first surface wins: the union's distance is near zero all along
+// a contact plane, its own roots are not. Steps: the secant root estimate through the previous
+// point while the distance falls (exact for a plane at any angle, where plain steps crawl at
+// grazing angles; short of the root where the distance is convex), else a plain step; a point below
+// zero brackets the root and regula falsi closes the bracket (Illinois: the value of an end that
+// stayed twice is halved). Converged: a point within tol of the surface (either side), or a bracket
+// narrower than 1e-5 t (its outer end). The distance growing again without a root is a near miss (a
+// ray that passes within eps of a silhouette is not widened onto it; tPast: a point the object has
+// no root before) — but only where the last step cannot have passed a root: a secant step beyond
+// the previous point's sphere that lands where the distance grew with the two spheres not
+// overlapping is discarded, and the search goes on from the previous point with plain steps only.
+// So a thin sliver of the object (a grazing ray clipping a silhouette, a field's concave cell) is
+// found whatever point the search started from; plain steps crawl along a grazing ray, so such a
+// search may take eight times the refineSteps evaluations. Every evaluation but a scanned
+// candidate's first (its gate, sdfMarch) counts against the step limit; a search that the limit
 // cuts short takes its best point when it is within eps / 10 or bracketed.
 //
 // A baked field's search walks its cells instead (cellStep): from t0 (or where the ray enters the
@@ -182,13 +195,16 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 struct RootSearch {
     uint obj;
     float t0, gate, tEnd, tol, eps;
-    bool countFirst;  // the first evaluation counts against the step limit
+    // Started by the decision's scan (not the candidate's own first search): its first evaluation
+    // (the gate) does not count against the step limit, and a field's walk does not end past a far
+    // cell (cellStep).
+    bool scanned;
     // A candidate searched against a root found already: its first root before tEnd, so a near
     // miss does not end it; it goes on with plain steps from there.
     bool untilEnd;
     float ta, sa, tp, sp, tb, sb, tr, voxel;
     bool bracket, prev, pending, plain, done;
-    int side;  // the end of the bracket that moved last: 1 a, -1 b, -2 b twice
+    int side;  // the end of the bracket that moved last: 1 a, -1 b
     int r, limit;
     float tPast, sFirst, result;
     // A field's cell walk (cells, cellStep): the current cell; the walk reuses the secant search's
@@ -277,14 +293,14 @@ float cellFirstRoot(float c[8], vec3 ua, vec3 ub) {
 
 // known: s0 is the object's raw distance at t0 (else the first evaluation is at t0).
 void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s0, bool known, float gate,
-               float tEnd, float tol, float eps, bool countFirst) {
+               float tEnd, float tol, float eps, bool scanned) {
     s.obj = obj;
     s.t0 = t0;
     s.gate = gate;
     s.tEnd = tEnd;
     s.tol = tol;
     s.eps = eps;
-    s.countFirst = countFirst;
+    s.scanned = scanned;
     s.untilEnd = false;
     s.tPast = t0;
     s.sFirst = s0;
@@ -369,7 +385,7 @@ bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
             } else if (s.cells) {
                 tr = s.ta;  // the next cell (cellStep)
             } else if (s.bracket) {
-                tr = s.side == -2 ? 0.5 * (s.ta + s.tb) : s.ta - s.sa * (s.tb - s.ta) / (s.sb - s.sa);
+                tr = s.ta - s.sa * (s.tb - s.ta) / (s.sb - s.sa);
                 if (!(tr > s.ta && tr < s.tb)) tr = 0.5 * (s.ta + s.tb);
             } else {
                 bool secant = !s.plain && s.prev && s.sa < s.sp;
@@ -396,7 +412,7 @@ bool rootNext(inout RootSearch s, uint steps, uint stepLimit) {
 
 // The object's raw distance sr at s.tr.
 void rootTake(inout RootSearch s, float sr, inout uint steps) {
-    if (s.r >= 0 || s.countFirst) ++steps;
+    if (s.r >= 0) ++steps;  // the gate of a scanned candidate does not count (sdfMarch)
     int r = s.r;
     s.r += 1;
     float tr = s.tr;
@@ -406,14 +422,19 @@ void rootTake(inout RootSearch s, float sr, inout uint steps) {
         s.pending = true;
         return;
     }
-    if (sr >= 0.0 && sr <= s.tol) {
+    if (abs(sr) <= s.tol) {
+        // Within tol of the surface, on either side: float rounding of the distance near a root
+        // puts a converged estimate on either side, and a point just inside would otherwise
+        // start a slow regula falsi from that side.
         rootFinish(s, tr);
     } else if (sr < 0.0) {
         s.tb = tr;
         s.sb = sr;
         s.bracket = true;
-        s.side = s.side == -1 ? -2 : -1;
+        if (s.side == -1) s.sa *= 0.5;  // b moved twice: Illinois
+        s.side = -1;
     } else if (s.bracket) {
+        if (s.side == 1) s.sb *= 0.5;  // a moved twice: Illinois
         s.ta = tr;
         s.sa = sr;
         s.side = 1;
@@ -505,7 +526,7 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     ivec3 next = s.cell + ivec3(leaves) * ivec3(sign(xd));
     bool far = cmin * s.voxel >= s.eps && tOut >= s.t0 + 0.5 * s.eps;
     if (tOut >= s.tb || any(lessThan(next, ivec3(0))) || any(greaterThan(next, dims - 2)) ||
-        (far && !s.countFirst)) {
+        (far && !s.scanned)) {
         s.tPast = tOut;
         rootFinish(s, -1.0);
         return;
@@ -734,10 +755,17 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         // root must not hide a nearer surface; docs/ACCURACY.md). A field's safe distance lies up
         // to its interpolation bound below the interpolated one, so the raw value decides; the
         // candidate's raw value here is known from the step's evaluation (the same value the
-        // search's own first evaluation would take).
+        // search's own first evaluation would take). The scan skips every other candidate when
+        // the march's lower bound of their distances here (`second`: safe distances, box
+        // distances, the boxes ahead along the ray) is not below the gap: each one's raw distance
+        // here is then at least the gap, so its search would end at its first evaluation (the
+        // gate) without a root. The bound differs with culling and without, the step count does
+        // not: the gate does not count against the step limit, and the scan searches no object
+        // whose box the ray enters only past the gap (candidateCrossed).
         int decision = -1;
         int decisionCount = int(candidateCount());
         float dRaw = g_nearestRaw, dNearPast = t, dBest = 3.0e38;
+        float dSecond = second;  // the other candidates' lower bound here
         float dTol = max(kRootTolerance * eps, 1e-6 * t);
         uint dRoot = 0xffffffffu;
         bool nearestDone = true;  // the candidate's own search needs no second one
@@ -778,12 +806,15 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             }
             // The next candidate that could be crossed before the best root so far.
             bool started = false;
+            float gap = dRoot != 0xffffffffu ? dBest - t : eps;
+            if (dSecond >= gap && nearestDone) decision = decisionCount;  // none can be crossed
             for (++decision; decision < decisionCount; ++decision) {
                 if (trace.counts.w == 0u || steps >= stepLimit) break;
                 uint obj = candidateObject(uint(decision), t);
                 if ((obj == nearest && nearestDone) || obj == dRoot || obj == 0xffffffffu) continue;
-                float gap = dRoot != 0xffffffffu ? dBest - t : eps;
+                if (obj != nearest && dSecond >= gap) continue;
                 if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
+                if (!candidateCrossed(uint(decision), obj, ro, rd, t, gap)) continue;
                 rootStart(search, obj, ro, rd, t, d, false, gap, min(dBest, tMax), dTol, eps, true);
                 search.untilEnd = dRoot != 0xffffffffu;
                 started = true;

@@ -27,20 +27,21 @@
 //     is; if the step limit runs out, the point with the smallest d / t (screen-space error) is kept
 //     when that error is within 4x the hit threshold (Keinert's hit selection), else the pixel is a
 //     miss;
-//  5. the hit decision (RootSearch; refineSteps 0: every candidate is a hit where it is): the first
-//     root along the ray of the candidate's object on its own raw distance (no interpolation
+//  5. the hit decision (RootSearch; refineSteps 0: every candidate is a hit where it is): the
+//     first root along the ray of the candidate's object on its own raw distance (no interpolation
 //     safety), and of every other candidate object whose distance here is below the gap to the best
 //     root so far (below hitEpsilon while there is none) — secant steps while the distance falls,
 //     regula falsi once a point below zero brackets the root, at most refineSteps evaluations per
-//     object, converged within 1e-3 hit epsilons above the surface. The earliest root is the hit,
-//     on its object (the first surface at a contact line, e.g. a box standing on the floor, where
-//     the union's distance is near zero all along the contact plane); when no object has a root
-//     (the distance grows again: the ray passes within hitEpsilon of a silhouette; concluded only
-//     from steps that cannot have passed a root: a secant step that does is replaced by plain
-//     steps) the march goes on past the candidate object's closest approach. The decision depends only on the ray and the
-//     objects, not on where the march's samples landed, so culling, the world cache and
+//     object, converged within 1e-3 hit epsilons of the surface. The earliest root is the hit, on
+//     its object (the first surface at a contact line, e.g. a box standing on the floor, where the
+//     union's distance is near zero all along the contact plane); when no object has a root (the
+//     distance grows again: the ray passes within hitEpsilon of a silhouette; concluded only from
+//     steps that cannot have passed a root: a secant step that does is replaced by plain steps) the
+//     march goes on past the candidate object's closest approach. The decision depends only on the
+//     ray and the objects, not on where the march's samples landed, so culling, the world cache and
 //     over-relaxation leave the picture as it is (tests/renderer/sdf_accel_parity_test.cpp). steps
-//     counts every evaluation and never exceeds the step limit;
+//     counts every evaluation but a scanned candidate's first (its gate) and never exceeds the step
+//     limit;
 //  6. the normal is the gradient of the hit object's world distance by central differences over
 //     a tetrahedron (4 evaluations) with h = normalEpsilon pixel footprints (at least 1e-5 of the
 //     distance from the origin, for float precision, and for fields at least half a voxel);
