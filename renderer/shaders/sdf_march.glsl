@@ -37,6 +37,10 @@ float g_nearestRaw;  // and its raw value (a field's filtered value, no safety b
 // Boxes ahead (culled march): the march point's ray parameter, the hit epsilon there, and the ray
 // distance from it to the nearest candidate box that the ray enters only more than an eps ahead.
 float g_marchT, g_marchEps, g_ahead;
+// The over-relaxation check's objects: those whose box the ray had entered by g_enteredBy (the last
+// march point plus its eps), and the least of their distances at the march point (box distances
+// for the ones not evaluated); every object without culling.
+float g_enteredBy, g_enteredMin;
 
 #ifdef SDF_MARCH_NO_TILES
 uint tileObject(uint i) { return i; }
@@ -107,8 +111,9 @@ float marchLocalDistance(uint obj, vec3 pl, float safety, bool rootBound, out fl
 // of it lies on the ray before that entry, so g_ahead, the ray distance to the nearest such entry,
 // bounds how far the march may step along the ray (it bounds `second` too, a bound along the ray
 // only, for the near-miss step), while the returned distance and its sphere (the over-relaxation
-// check's backward radius) cover the objects entered so far. Without culling every traced object
-// is evaluated.
+// check's backward radius) cover the objects entered so far. g_enteredMin leaves out the objects
+// entered since the last march point: the step from there ended at most at their entry (sdfMarch),
+// so they need no sphere reaching back over it. Without culling every traced object is evaluated.
 float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint nearest, out float second) {
     float d = 3.0e38;
     second = 3.0e38;  // the nearest distance of the other objects (a lower bound)
@@ -116,6 +121,7 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
     g_nearestUncapped = 3.0e38;
     g_nearestRaw = 3.0e38;
     g_ahead = 3.0e38;
+    g_enteredMin = 3.0e38;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
     uint count = one ? 1u : candidateCount();
@@ -128,17 +134,20 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
             g_ahead = min(g_ahead, g_interval[i].x - g_marchT);
             continue;
         }
+        bool entered = !cull || g_overflow || g_interval[i].x <= g_enteredBy;
         vec3 pl = sdfToLocal(obj, p);
         if (cull) {
             float box = sdfBoxDistance(obj, pl);
             if (box >= d) {  // cannot be nearer than the best so far; its box bounds `second`
                 second = min(second, box);
+                if (entered) g_enteredMin = min(g_enteredMin, box);
                 continue;
             }
         }
         ++g_evaluations;
         float ui, ri;
         float di = sdfObjects[obj].boundsMin.w * marchLocalDistance(obj, pl, safety, true, ui, ri);
+        if (entered) g_enteredMin = min(g_enteredMin, di);
         if (di < d || one) {
             second = d;
             d = di;
@@ -614,6 +623,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
     hitObject = 0xffffffffu;
     float omega = trace.epsilons.z;
     float prevRadius = 0.0, stepLength = 0.0, prevT = t;
+    float enteredBy = 3.0e38;
     // The voxel of the last cache lookup that gave neither a cache step nor an id-field object (0:
     // none, or the last one gave something). While the march's last evaluated distance stays below
     // two of those voxels the point is as near a surface as it was there, and the lookup is
@@ -669,6 +679,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             g_marchT = t;
             g_marchEps = eps;
             g_ahead = 3.0e38;
+            g_enteredBy = enteredBy;
             if (!cacheStep) d = sceneDistance(q, tFrom, safety, only, nearest, second);
             if (only != 0xffffffffu && d < eps) {
                 // The id field's object is a hit candidate: the hit decision starts from every
@@ -679,7 +690,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 continue;
             }
             float radius = abs(d);
-            if (omega > 1.0 && radius + prevRadius < stepLength) {
+            if (omega > 1.0 && (cacheStep ? radius : abs(g_enteredMin)) + prevRadius < stepLength) {
                 // The spheres do not overlap: the over-relaxed step may have skipped a surface.
                 // Back to the previous point, plain step from there, no more over-relaxation.
                 t = prevT + prevRadius;
@@ -695,6 +706,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 ++cacheSteps;
                 prevRadius = d;
                 prevT = t;
+                enteredBy = 3.0e38;
                 stepLength = d;
                 t += d;
                 continue;
@@ -727,11 +739,19 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 keepBestCandidate(g_nearestUncapped / max(t, 1e-6), t, nearest, bestError, bestT, bestObject);
             // Forward along the ray the point is safe up to its sphere and the nearest box entered
             // only ahead (sceneDistance), whichever is nearer; the next point's sphere must reach
-            // back to that (the over-relaxation check above).
+            // back to that (the over-relaxation check above, over the objects entered by now). An
+            // over-relaxed step ends at that box's entry at the latest: past it, the object there
+            // (a floor whose box begins at its surface) would fail the check. A field whose safe
+            // distance is its root bound (sdfFieldRootDistance, up to 1.75 times below the
+            // distance) takes a plain step: approaching it, an over-relaxed step fails the check.
             float forward = min(radius, g_ahead);
             prevRadius = forward;
             prevT = t;
-            stepLength = omega * forward;
+            // Boxes entered from here on are left out of the next check only when this step was
+            // bounded by their entries (a culled list's evaluation, not the id field's object).
+            bool listed = (trace.accel.x & kCullFlag) != 0u && !g_overflow && only == 0xffffffffu;
+            enteredBy = listed ? t + eps : 3.0e38;
+            stepLength = min((d < g_nearestUncapped ? 1.0 : omega) * forward, g_ahead);
             t += stepLength;
             ++steps;
             if (t > tMax && stepLength > forward) {
