@@ -12,6 +12,16 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_world_cache_update;
+
+// The clipmap (an engine-free module) keeps defaults of its own; they are the scene's.
+constexpr ClipmapSettings kClipmapDefaults{};
+constexpr scene::AccelerationSettings kSceneDefaults{};
+static_assert(kClipmapDefaults.levels == kSceneDefaults.cacheLevels &&
+                  kClipmapDefaults.resolution == kSceneDefaults.cacheResolution &&
+                  kClipmapDefaults.voxel == kSceneDefaults.cacheVoxel &&
+                  kClipmapDefaults.budgetVoxels == kSceneDefaults.cacheBudgetVoxels,
+              "ClipmapSettings' defaults must equal scene::AccelerationSettings' cache defaults");
+
 constexpr uint32_t kMaxGroupsPerDispatch = 65535;
 constexpr uint32_t kExactProgram = 1u;  // CacheObjectFlags: the shape program's value is exact
 
