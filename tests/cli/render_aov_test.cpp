@@ -62,7 +62,8 @@ TEST(AovList, RefusesBadItems) {
         const char* message;
     };
     const Case cases[] = {
-        {"colour=c.pfm", "unknown AOV 'colour' (depth, normal, ids, steps, ao, shadow, shadowN, bentnormal, thickness)"},
+        {"colour=c.pfm",
+         "unknown AOV 'colour' (depth, normal, ids, steps, ao, shadow, shadowN, bentnormal, thickness)"},
         {"depth=a.pfm,depth=b.pfm", "AOV 'depth' is listed twice"},
         {"depth=d.png", "must end in .pfm"},
         {"depth=d", "must end in .pfm"},
@@ -335,6 +336,46 @@ TEST_P(RenderAovCli, IdsAndStepsOfAMeshScene) {
     EXPECT_GE(both ? double(same) / double(both) : 0.0, 0.99);
     EXPECT_EQ(badBackground, 0u) << "ids not -1 where nothing is hit";
     EXPECT_EQ(nonZeroSteps, 0u) << "a rasterized pixel has trace steps";
+}
+
+// `penumbra demo --aov` (the built-in scene, rasterized meshes): the AOVs are written at the image's
+// size, ids are -1 exactly where depth is 0 and name an entity elsewhere, and steps are 0 (no pixel
+// is traced). A bad list is a usage error (exit 2) that writes nothing, not even the PNG.
+TEST_P(RenderAovCli, DemoWritesAovs) {
+    constexpr uint32_t kW = 96, kH = 54;
+    const CliRun r =
+        runCli(fmt::format("demo --backend {} --validation --width {} --height {} -o '{}/demo.png' "
+                           "--aov 'depth={}/d.pfm,ids={}/i.pfm,steps={}/s.pfm'",
+                           backend(), kW, kH, m_dir, m_dir, m_dir, m_dir),
+               m_dir + "/demo.log");
+    ASSERT_EQ(r.status, 0) << r.output;
+    const reference::FloatImage depth = readImage(m_dir + "/d.pfm", 1);
+    const reference::FloatImage ids = readImage(m_dir + "/i.pfm", 1);
+    const reference::FloatImage steps = readImage(m_dir + "/s.pfm", 1);
+    ASSERT_EQ(depth.width, kW);
+    ASSERT_EQ(depth.height, kH);
+    ASSERT_EQ(ids.data.size(), depth.data.size());
+    ASSERT_EQ(steps.data.size(), depth.data.size());
+    size_t hit = 0, idMismatch = 0, traced = 0;
+    for (size_t i = 0; i < depth.data.size(); ++i) {
+        const bool h = depth.data[i] > 0.0f;
+        hit += h;
+        idMismatch += h ? !(ids.data[i] >= 0.0f) : ids.data[i] != -1.0f;
+        traced += steps.data[i] != 0.0f;
+    }
+    EXPECT_GT(hit, size_t(kW) * kH / 2) << "the demo's floor and objects cover most of the image";
+    EXPECT_LT(hit, size_t(kW) * kH) << "and the background the rest";
+    EXPECT_EQ(idMismatch, 0u);
+    EXPECT_EQ(traced, 0u) << "the demo scene is rasterized";
+
+    const CliRun bad = runCli(fmt::format("demo --backend {} --width {} --height {} -o '{}/bad.png' --aov "
+                                          "'depth={}/bad_d.pfm,bogus={}/bad_x.pfm'",
+                                          backend(), kW, kH, m_dir, m_dir, m_dir),
+                              m_dir + "/bad.log");
+    EXPECT_EQ(bad.status, 2) << bad.output;
+    EXPECT_NE(bad.output.find("unknown AOV 'bogus'"), std::string::npos) << bad.output;
+    EXPECT_FALSE(std::filesystem::exists(m_dir + "/bad.png"));
+    EXPECT_FALSE(std::filesystem::exists(m_dir + "/bad_d.pfm"));
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, RenderAovCli, testing::ValuesIn(gpuBackends()), backendName);

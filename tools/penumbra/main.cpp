@@ -1,7 +1,7 @@
 // penumbra — command-line front end.
 //   penumbra info [--backend vulkan|gl]      device, driver and limits
 //   penumbra render <scene> -o out.png [...] a scene through the embedding API (cmd_render.cpp)
-//   penumbra demo -o out.png [--backend] [--width --height]   the built-in demo scene + timing table
+//   penumbra demo -o out.png [--backend] [--width --height] [--aov]   the built-in demo scene + timings
 //   penumbra bake <mesh> -o out.psdf [...]   mesh -> signed distance field (cmd_bake.cpp)
 //   penumbra sdf info|sample <file.psdf>     inspect / sample a .psdf file (cmd_sdf.cpp)
 //   penumbra reference <scene> -o DIR --aov ...  CPU reference AOVs as PFM (cmd_reference.cpp)
@@ -17,10 +17,12 @@
 #include <cstdio>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include <fmt/format.h>
 #include <CLI/CLI.hpp>
 
+#include "aov_output.h"
 #include "cli_common.h"
 #include "cmd_bench.h"
 #include "cmd_reference.h"
@@ -114,7 +116,7 @@ void printTimings(const std::vector<penumbra::fg::PassTiming>& timings) {
 }
 
 int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width, uint32_t height,
-            const std::string& graphvizPath) {
+            const std::string& graphvizPath, const std::string& aovSpec) {
     // Everything that can be checked is checked before the frame is rendered.
     std::string err;
     penumbra::RendererDesc rendererDesc;
@@ -129,8 +131,16 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
         penumbra::log::error("demo: {}", err);
         return 2;
     }
+    std::vector<penumbra::cli::AovOutput> aovs;
+    if (!penumbra::cli::parseAovOutputs(aovSpec, aovs, err) ||
+        !penumbra::cli::requestAuxTarget(rendererDesc, aovs, err)) {
+        penumbra::log::error("demo: {}", err);
+        return 2;
+    }
+    std::vector<std::string> outputPaths = penumbra::cli::aovPaths(aovs);
+    outputPaths.insert(outputPaths.begin(), {output, graphvizPath});
     penumbra::OutputFiles outputs;
-    if (!penumbra::cli::prepareOutputs(outputs, {output, graphvizPath}, "demo")) return 1;
+    if (!penumbra::cli::prepareOutputs(outputs, outputPaths, "demo")) return 1;
     // The built-in demo scene (engine/scene/demo_scene.h) through the scene renderer: the same
     // frame path as `penumbra render`.
     std::unique_ptr<penumbra::Engine> engine = penumbra::Engine::create({}, err);
@@ -160,7 +170,8 @@ int runDemo(const DeviceOptions& opt, const std::string& output, uint32_t width,
         return 1;
     }
     if (!penumbra::cli::writePngOutput(outputs, output, image, err) ||
-        (!graphvizPath.empty() && !outputs.writeText(graphvizPath, renderer->frameGraphviz(), err))) {
+        (!graphvizPath.empty() && !outputs.writeText(graphvizPath, renderer->frameGraphviz(), err)) ||
+        !penumbra::cli::writeAovOutputs(outputs, renderer->sceneRenderer(), width, height, aovs, err)) {
         penumbra::log::error("demo: {}", err);
         return 1;
     }
@@ -200,7 +211,7 @@ int main(int argc, char** argv) {
     addDeviceOptions(info, infoOpt);
 
     DeviceOptions demoOpt;
-    std::string output = "out/default.png", graphviz;
+    std::string output = "out/default.png", graphviz, demoAov;
     uint32_t width = 640, height = 360;
     auto* demo = app.add_subcommand(
         "demo", "Render the built-in demo scene (no scene file) to a PNG and print per-pass GPU/CPU times");
@@ -213,6 +224,7 @@ int main(int argc, char** argv) {
                                  "Image height in pixels (1 .. device max 2D texture size)")
         ->capture_default_str();
     demo->add_option("--graphviz", graphviz, "Also write the frame graph as Graphviz dot to this file");
+    penumbra::cli::addAovOption(demo, demoAov);
 
     penumbra::cli::RenderOptions renderOpt;
     auto* render = penumbra::cli::addRenderCommand(app, renderOpt);
@@ -240,7 +252,7 @@ int main(int argc, char** argv) {
     if (info->parsed()) return runInfo(infoOpt);
     if (render->parsed()) return penumbra::cli::runRender(renderOpt);
     if (reference->parsed()) return penumbra::cli::runReference(referenceOpt);
-    if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz);
+    if (demo->parsed()) return runDemo(demoOpt, output, width, height, graphviz, demoAov);
     if (bake->parsed()) {
         std::string commandLine;
         for (int i = 0; i < argc; ++i) commandLine += (i ? " " : "") + std::string(argv[i]);
