@@ -1106,8 +1106,10 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
         keptBuffers["sdf.objects"] = {graph.physicalBuffer(sb->objects),
                                       uint64_t(sdfData.objects.size()) * sizeof(GpuSdfObject)};
     if (const SdfCullLists* lists = board.find<SdfCullLists>()) {
-        for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao})
+        for (const SdfTileLists* l : {&lists->primary, &lists->shadow, &lists->ao}) {
             st.tileListBytes += l->bytes;
+            st.tileListScratchBytes += l->scratchBytes;
+        }
         if (lists->primary.valid()) {
             const uint64_t rangeBytes = uint64_t(lists->primary.tilesX) * lists->primary.tilesY * 8;
             keptBuffers["sdf.tile_ranges"] = {graph.physicalBuffer(lists->primary.ranges), rangeBytes};

@@ -127,7 +127,8 @@ struct FrameStats {
     uint64_t triangles = 0;
     uint32_t lights = 0;
     uint32_t materials = 0;
-    uint64_t tileListBytes = 0;  // per-tile object lists (renderer/features/sdf_cull.h), all kinds
+    uint64_t tileListBytes = 0;         // per-tile object lists (renderer/features/sdf_cull.h), all kinds
+    uint64_t tileListScratchBytes = 0;  // the culling passes' working buffers behind those lists
     // The trace mode that ran (scene::TraceMode Fullscreen or Box; `auto` resolved), and the
     // objects the box trace drew as boxes / as near-plane triangles (inside or crossing the near
     // plane, unbounded). Fullscreen when the frame traced no SDF object.

@@ -236,6 +236,8 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     lists.ranges = fineLists.ranges;
     lists.indices = fineLists.indices;
     lists.bytes = uint64_t(lists.tilesX) * lists.tilesY * 8 + fine * 4;
+    lists.scratchBytes = uint64_t(std::max(count, 1u)) * sizeof(bounds::TileCullObject) + 16 +
+                         uint64_t(coarseTiles.x) * coarseTiles.y * 8 + coarse * 4;
     fc.graph.markOutput(lists.ranges);
     fc.graph.markOutput(lists.indices);
 

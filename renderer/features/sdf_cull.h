@@ -37,6 +37,9 @@ struct SdfTileLists {
     uint32_t tilesX = 0, tilesY = 0;
     uint32_t layers = 1;
     uint64_t bytes = 0;  // ranges + indices
+    // The culling's working buffers of the frame behind these lists (per-object records, counters,
+    // the coarse level, dummy ranges), counted on one list of those that share them.
+    uint64_t scratchBytes = 0;
     bool valid() const { return ranges.isValid() && indices.isValid(); }
 };
 

@@ -181,8 +181,14 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     fc.graph.markOutput(data.indices);
     SdfCullLists all = fc.board.has<SdfCullLists>() ? *fc.board.find<SdfCullLists>() : SdfCullLists{};
     lists.indices = data.indices;
+    // The working buffers (counters, per-tile and per-object records, the unused list's ranges),
+    // counted on the first list built.
+    const uint64_t scratch = kCounterBytes + tiles * kTileBytes +
+                             uint64_t(sdfScene.objectCount) * kObjectBytes + (layers > 0 ? 0 : tiles * 8) +
+                             (ao ? 0 : 16);
     if (layers > 0) {
         all.shadow = lists;
+        all.shadow.scratchBytes = scratch;
         all.shadow.ranges = data.shadowRanges;
         all.shadow.layers = layers;
         all.shadow.bytes = tiles * layers * 8 + indexBytes;
@@ -192,6 +198,7 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
         all.ao = lists;
         all.ao.ranges = data.aoRanges;
         all.ao.bytes = tiles * 8 + (layers > 0 ? 0 : indexBytes);  // the indices are shared: counted once
+        all.ao.scratchBytes = layers > 0 ? 0 : scratch;
         fc.graph.markOutput(data.aoRanges);
     }
     fc.board.add(all);

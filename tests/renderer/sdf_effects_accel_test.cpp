@@ -73,7 +73,26 @@ struct Frame {
     bool haveCounters = false;
     uint32_t objects = 0;  // SDF objects of the frame (traced + occluders)
     uint64_t tileListBytes = 0;
+    uint64_t tileListScratchBytes = 0;
+    uint64_t graphCullBytes = 0;  // the culling's buffers as the frame graph declared them
 };
+
+// The bytes of the frame graph's buffers that the tile culling passes create (sdf_tile_cull*,
+// sdf_tile_cull_effects*: named sdf.tile_*, sdf.effects_*, sdf.shadow_tile_*, sdf.ao_tile_*), read
+// from the Graphviz dump, whose resource labels are "NAME\nN bytes...".
+uint64_t cullBufferBytes(const std::string& dot) {
+    uint64_t total = 0;
+    for (size_t at = dot.find("label=\""); at != std::string::npos; at = dot.find("label=\"", at + 1)) {
+        const size_t start = at + 7, end = dot.find("\\n", start);
+        if (end == std::string::npos) continue;
+        const std::string name = dot.substr(start, end - start);
+        const bool cull = name.rfind("sdf.tile_", 0) == 0 || name.rfind("sdf.effects_", 0) == 0 ||
+                          name.rfind("sdf.shadow_tile_", 0) == 0 || name.rfind("sdf.ao_tile_", 0) == 0;
+        const size_t bytes = dot.find(" bytes", end);
+        if (cull && bytes != std::string::npos) total += std::stoull(dot.substr(end + 2, bytes - end - 2));
+    }
+    return total;
+}
 
 // A 6 x 4 grid of small objects on a floor under a sun (angular radius 3 deg) and a sphere light.
 std::string gridScene() {
@@ -201,6 +220,8 @@ Frame renderFrame(rhi::Device& device, Engine& engine, const AccelToggles& t) {
     const render::FrameStats& stats = renderer.lastFrameStats();
     f.objects = stats.sdfObjects + stats.sdfOccluders;
     f.tileListBytes = stats.tileListBytes;
+    f.tileListScratchBytes = stats.tileListScratchBytes;
+    f.graphCullBytes = cullBufferBytes(renderer.lastFrameGraphviz());
     device.waitIdle();
     return f;
 }
@@ -320,6 +341,10 @@ protected:
                 << name << ": mean list length < object count (the lists cull)";
             EXPECT_EQ(over, 0u) << name << ": no list past the capacity (<= 32 objects: the exact bound)";
             EXPECT_GT(on.tileListBytes, 0u) << name << ": FrameStats::tileListBytes counts the lists";
+            // The lists and the culling's working buffers together are every buffer the culling
+            // passes declared (exact: the stats are computed from the same sizes).
+            EXPECT_EQ(on.tileListBytes + on.tileListScratchBytes, on.graphCullBytes)
+                << name << ": FrameStats::tileListScratchBytes counts the rest of the culling's buffers";
         }
     }
 };

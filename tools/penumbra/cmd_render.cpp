@@ -108,6 +108,7 @@ nlohmann::json statsJson(const StatsRun& run, Engine& engine, const render::Fram
                     {"thickness", stats.effects.thickness},       {"reflection", stats.effects.reflection},
                     {"targetBytes", stats.effects.targetBytes},   {"lowResBytes", stats.effects.lowResBytes}};
     j["tileListBytes"] = stats.tileListBytes;
+    j["tileListScratchBytes"] = stats.tileListScratchBytes;
     // The SDF trace mode that ran (render.traceMode / --trace-mode, `auto` resolved) and the box
     // trace's draws (renderer/features/sdf_box_trace.h).
     j["traceMode"] = {{"ran", scene::toString(stats.traceMode)},
