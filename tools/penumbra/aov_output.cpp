@@ -37,7 +37,8 @@ bool parseAovName(const std::string& name, AovOutput& out) {
 }
 
 bool isEffectAov(RenderAov a) {
-    return a == RenderAov::Ao || a == RenderAov::Shadow || a == RenderAov::BentNormal || a == RenderAov::Thickness;
+    return a == RenderAov::Ao || a == RenderAov::Shadow || a == RenderAov::BentNormal ||
+           a == RenderAov::Thickness;
 }
 
 // The effect target an effect AOV reads and, when it was not part of the frame, what turns it on.
@@ -50,13 +51,14 @@ const char* effectHint(RenderAov a) {
     switch (a) {
         case RenderAov::Shadow:
             return "no shadow pass ran in the last frame: shadows need a light with castShadows, shadows on "
-                   "(--shadows on|hard, render.shadows.enabled) and SDF objects in the frame";
+                   "(render.shadows.enabled; penumbra render --shadows on|hard) and SDF objects in the frame";
         case RenderAov::Thickness:
             return "no thickness pass ran in the last frame: it needs a material with subsurface > 0 and SDF "
                    "objects in the frame";
         default:
-            return "AO did not run in the last frame: turn it on with --ao five-tap|multi-ray|cones "
-                   "(render.ao.variant); it needs SDF objects in the frame";
+            return "AO did not run in the last frame: turn it on with render.ao.variant (penumbra render "
+                   "--ao "
+                   "five-tap|multi-ray|cones); it needs SDF objects in the frame";
     }
 }
 
@@ -128,8 +130,10 @@ CLI::Option* addAovOption(CLI::App* cmd, std::string& spec) {
         "--aov", spec,
         "Also write float images of the last frame as PFM, comma-separated NAME=PATH.pfm: depth (linear view "
         "depth, 0: nothing hit), normal (world unit normal), ids (entity index, -1: background), steps "
-        "(sphere-trace steps), ao (ambient occlusion), shadow / shadowN (visibility of the first / Nth shadowed "
-        "light), bentnormal (AO bent normal), thickness (subsurface thickness); docs/FORMATS.md \"AOV images\"");
+        "(sphere-trace steps), ao (ambient occlusion), shadow / shadowN (visibility of the first / Nth "
+        "shadowed "
+        "light), bentnormal (AO bent normal), thickness (subsurface thickness); docs/FORMATS.md \"AOV "
+        "images\"");
 }
 
 bool parseAovOutputs(const std::string& spec, std::vector<AovOutput>& out, std::string& error) {
@@ -246,14 +250,15 @@ bool convertEffectAov(const AovOutput& aov, uint32_t width, uint32_t height, con
         // width * layers x height: the layer count follows from the size
         const size_t layers = pixels ? effect.texels.size() / pixels : 0;
         if (effect.format != rhi::Format::R8_UNORM || layers * pixels != effect.texels.size()) {
-            error = fmt::format("effects.shadow: {} bytes of {} do not make layers of {}x{}", effect.texels.size(),
-                                rhi::formatInfo(effect.format).name, width, height);
+            error = fmt::format("effects.shadow: {} bytes of {} do not make layers of {}x{}",
+                                effect.texels.size(), rhi::formatInfo(effect.format).name, width, height);
             return false;
         }
         if (aov.light >= layers) {
-            error = fmt::format("the last frame has {} shadowed light(s) (shadow = the first, shadowN = light N "
-                                "from 0; lights with castShadows)",
-                                layers);
+            error = fmt::format(
+                "the last frame has {} shadowed light(s) (shadow = the first, shadowN = light N "
+                "from 0; lights with castShadows)",
+                layers);
             return false;
         }
         for (size_t y = 0; y < height; ++y)
@@ -265,7 +270,8 @@ bool convertEffectAov(const AovOutput& aov, uint32_t width, uint32_t height, con
         return true;
     }
     if (aov.kind == RenderAov::Thickness) {
-        if (!checkTarget(&effect, "effects.thickness", rhi::Format::R16_FLOAT, width, height, error)) return false;
+        if (!checkTarget(&effect, "effects.thickness", rhi::Format::R16_FLOAT, width, height, error))
+            return false;
         for (size_t i = 0; i < pixels; ++i) {
             uint16_t h;
             std::memcpy(&h, effect.texels.data() + i * 2, 2);
