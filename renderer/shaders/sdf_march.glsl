@@ -39,8 +39,10 @@ float g_nearestRaw;  // and its raw value (a field's filtered value, no safety b
 float g_marchT, g_marchEps, g_ahead;
 // The over-relaxation check's objects: those whose box the ray had entered by g_enteredBy (the last
 // march point plus its eps), and the least of their distances at the march point (box distances
-// for the ones not evaluated); every object without culling.
+// for the ones not evaluated); every object without culling. g_aheadRule: the last sceneDistance
+// left the boxes ahead out (a culled per-pixel list, not the id field's object alone).
 float g_enteredBy, g_enteredMin;
+bool g_aheadRule;
 
 #ifdef SDF_MARCH_NO_TILES
 uint tileObject(uint i) { return i; }
@@ -124,17 +126,19 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
     g_enteredMin = 3.0e38;
     bool one = only != 0xffffffffu;
     bool cull = (trace.accel.x & kCullFlag) != 0u && !one;
+    bool ahead = cull && !g_overflow;  // the per-pixel list: boxes ahead are left out
+    g_aheadRule = ahead;
     uint count = one ? 1u : candidateCount();
     for (uint i = 0u; i < count; ++i) {
         uint obj = one ? only : candidateObject(i, tFrom);
         if (obj == 0xffffffffu) continue;  // the ray had left this box for good
-        if (cull && !g_overflow && g_interval[i].x > g_marchT + g_marchEps) {
+        if (ahead && g_interval[i].x > g_marchT + g_marchEps) {
             // The ray enters this box only ahead: none of its surface lies on the ray before the
             // entry (at least an eps on, so that a march point just short of an entry moves on).
             g_ahead = min(g_ahead, g_interval[i].x - g_marchT);
             continue;
         }
-        bool entered = !cull || g_overflow || g_interval[i].x <= g_enteredBy;
+        bool entered = !ahead || g_interval[i].x <= g_enteredBy;
         vec3 pl = sdfToLocal(obj, p);
         if (cull) {
             float box = sdfBoxDistance(obj, pl);
@@ -748,9 +752,8 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
             prevRadius = forward;
             prevT = t;
             // Boxes entered from here on are left out of the next check only when this step was
-            // bounded by their entries (a culled list's evaluation, not the id field's object).
-            bool listed = (trace.accel.x & kCullFlag) != 0u && !g_overflow && only == 0xffffffffu;
-            enteredBy = listed ? t + eps : 3.0e38;
+            // bounded by their entries (g_aheadRule: a culled list's evaluation).
+            enteredBy = g_aheadRule ? t + eps : 3.0e38;
             stepLength = min((d < g_nearestUncapped ? 1.0 : omega) * forward, g_ahead);
             t += stepLength;
             ++steps;
