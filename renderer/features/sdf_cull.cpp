@@ -100,7 +100,7 @@ fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size)
 // "sdf_tile_cull_bounds": per object its camera-relative box, bounding sphere and tile rectangle
 // (sdf_tile_cull_bounds.comp), computed once instead of once per tile.
 fg::BufferRef addTileBounds(FrameContext& fc, const SdfTileCullDesc& desc, uint32_t count, uint32_t tilesX,
-                            uint32_t tilesY) {
+                            uint32_t tilesY, uint64_t& bytes) {
     struct Data {
         fg::BufferRef view, objects, out;
     };
@@ -109,6 +109,7 @@ fg::BufferRef addTileBounds(FrameContext& fc, const SdfTileCullDesc& desc, uint3
     const bounds::PushConstants push{glm::uvec4(count, tilesX, tilesY, 0),
                                      glm::vec4(desc.nearPlane, desc.farPlane, 0.0f, 0.0f)};
     const uint64_t size = uint64_t(std::max(count, 1u)) * sizeof(bounds::TileCullObject);
+    bytes = size;
     const Data& data = fc.graph.addPass<Data>(
         "sdf_tile_cull_bounds", fg::PassKind::Compute,
         [&](fg::PassBuilder& b, Data& d) {
@@ -138,6 +139,7 @@ struct CullLevel {
     glm::uvec2 tiles{0};             // tiles of this level
     uint32_t scale = 1;              // 8x8 tiles per tile side
     uint32_t coarseTilesX = 0;       // coarse tiles per row of the input lists (0: none)
+    uint64_t bytes = 0;              // this level's ranges + indices (addCullLevel's output)
 };
 
 // "sdf_tile_cull" at one level (sdf_tile_cull.comp); returns its ranges, indices and the counter.
@@ -188,6 +190,7 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
     out.counter = data.counter;
     out.ranges = data.ranges;
     out.indices = data.indices;
+    out.bytes = rangeBytes + indexBytes;
     return out;
 }
 
@@ -207,16 +210,20 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     const uint64_t coarse =
         std::min(tileListCapacity(desc, fc.width, fc.height, kCoarse), kSdfTileMaxIndices);
 
-    const fg::BufferRef objects = addTileBounds(fc, desc, count, lists.tilesX, lists.tilesY);
+    uint64_t boundsBytes = 0;
+    const fg::BufferRef objects = addTileBounds(fc, desc, count, lists.tilesX, lists.tilesY, boundsBytes);
+    constexpr uint64_t kCounterBytes = 16;
     struct Clear {
         fg::BufferRef counter;
     };
     const Clear& clear = fc.graph.addPass<Clear>(
         "sdf_tile_cull_clear", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, Clear& d) {
-            d.counter = b.write(storageBuffer(b, "sdf.tile_counter", 16), rhi::Access::CopyDst);
+            d.counter = b.write(storageBuffer(b, "sdf.tile_counter", kCounterBytes), rhi::Access::CopyDst);
         },
-        [](const Clear& d, fg::PassContext& ctx) { ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, 16, 0u); });
+        [](const Clear& d, fg::PassContext& ctx) {
+            ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, kCounterBytes, 0u);
+        });
 
     // Coarse tiles from every object (counter 0), then the 8x8 tiles from their coarse tile's list
     // (counter 1).
@@ -235,9 +242,8 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     const CullLevel fineLists = addCullLevel(fc, desc, level, "sdf_tile_cull", "sdf.tile");
     lists.ranges = fineLists.ranges;
     lists.indices = fineLists.indices;
-    lists.bytes = uint64_t(lists.tilesX) * lists.tilesY * 8 + fine * 4;
-    lists.scratchBytes = uint64_t(std::max(count, 1u)) * sizeof(bounds::TileCullObject) + 16 +
-                         uint64_t(coarseTiles.x) * coarseTiles.y * 8 + coarse * 4;
+    lists.bytes = fineLists.bytes;
+    lists.scratchBytes = boundsBytes + kCounterBytes + coarseLists.bytes;
     fc.graph.markOutput(lists.ranges);
     fc.graph.markOutput(lists.indices);
 

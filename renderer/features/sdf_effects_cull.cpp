@@ -35,12 +35,15 @@ fg::BufferRef storageBuffer(fg::PassBuilder& b, const char* name, uint64_t size)
 // sphere and the largest field voxel: one invocation per tile); returns the buffers it wrote.
 struct EffectsTiles {
     fg::BufferRef tiles, objects, counters;
+    uint64_t bytes = 0;  // the three buffers' sizes
 };
 
 EffectsTiles addEffectsTiles(FrameContext& fc, const EffectsDesc& desc, const SdfTileLists& lists) {
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const uint64_t tiles = uint64_t(lists.tilesX) * lists.tilesY;
+    const uint64_t tileBytes = tiles * kTileBytes,
+                   objectBytes = uint64_t(sdfScene.objectCount) * kObjectBytes;
     struct Clear {
         fg::BufferRef counters;
     };
@@ -78,11 +81,9 @@ EffectsTiles addEffectsTiles(FrameContext& fc, const EffectsDesc& desc, const Sd
             d.depth = b.read(gbuffer.depth, rhi::Access::ShaderSampled);
             b.read(d.scene.view, rhi::Access::UniformRead);
             readSdfScene(b, d.sdf);
-            d.tiles =
-                b.write(storageBuffer(b, "sdf.effects_tiles", tiles * kTileBytes), rhi::Access::ShaderWrite);
-            d.objects = b.write(
-                storageBuffer(b, "sdf.effects_objects", uint64_t(sdfScene.objectCount) * kObjectBytes),
-                rhi::Access::ShaderWrite);
+            d.tiles = b.write(storageBuffer(b, "sdf.effects_tiles", tileBytes), rhi::Access::ShaderWrite);
+            d.objects =
+                b.write(storageBuffer(b, "sdf.effects_objects", objectBytes), rhi::Access::ShaderWrite);
             d.counters = b.write(clear.counters, rhi::Access::ShaderRead | rhi::Access::ShaderWrite);
         },
         [&cache = fc.cache, &tileCs, tilePipeline, atlasSampler, nearest, tilePush, groupsX, groupsY](
@@ -100,7 +101,7 @@ EffectsTiles addEffectsTiles(FrameContext& fc, const EffectsDesc& desc, const Sd
             ctx.cmd.dispatch(groupsX, groupsY);
         });
 
-    return {tileData.tiles, tileData.objects, tileData.counters};
+    return {tileData.tiles, tileData.objects, tileData.counters, kCounterBytes + tileBytes + objectBytes};
 }
 
 }  // namespace
@@ -122,6 +123,9 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     const uint64_t capacity =
         std::min<uint64_t>(sdfEffectsListCapacity(tiles, listCount, sdfScene.objectCount), 0xfffffff0u);
     const uint64_t indexBytes = capacity * 4;
+    // One layer of ranges per shadowed light; a list kind that is not built gets a dummy (bound,
+    // never read).
+    const uint64_t shadowRangeBytes = tiles * std::max(layers, 1u) * 8, aoRangeBytes = ao ? tiles * 8 : 16;
 
     const EffectsTiles tileData = addEffectsTiles(fc, desc, lists);
 
@@ -150,11 +154,10 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
             d.counters = b.write(tileData.counters, rw);
-            d.shadowRanges =
-                b.write(storageBuffer(b, "sdf.shadow_tile_ranges", tiles * std::max(layers, 1u) * 8),
-                        rhi::Access::ShaderWrite);
-            d.aoRanges = b.write(storageBuffer(b, "sdf.ao_tile_ranges", ao ? tiles * 8 : 16),
-                                 rhi::Access::ShaderWrite);
+            d.shadowRanges = b.write(storageBuffer(b, "sdf.shadow_tile_ranges", shadowRangeBytes),
+                                     rhi::Access::ShaderWrite);
+            d.aoRanges =
+                b.write(storageBuffer(b, "sdf.ao_tile_ranges", aoRangeBytes), rhi::Access::ShaderWrite);
             d.indices =
                 b.write(storageBuffer(b, "sdf.effects_tile_indices", indexBytes), rhi::Access::ShaderWrite);
         },
@@ -183,21 +186,19 @@ void addSdfEffectsCull(FrameContext& fc, const EffectsDesc& desc) {
     lists.indices = data.indices;
     // The working buffers (counters, per-tile and per-object records, the unused list's ranges),
     // counted on the first list built.
-    const uint64_t scratch = kCounterBytes + tiles * kTileBytes +
-                             uint64_t(sdfScene.objectCount) * kObjectBytes + (layers > 0 ? 0 : tiles * 8) +
-                             (ao ? 0 : 16);
+    const uint64_t scratch = tileData.bytes + (layers > 0 ? 0 : shadowRangeBytes) + (ao ? 0 : aoRangeBytes);
     if (layers > 0) {
         all.shadow = lists;
         all.shadow.scratchBytes = scratch;
         all.shadow.ranges = data.shadowRanges;
         all.shadow.layers = layers;
-        all.shadow.bytes = tiles * layers * 8 + indexBytes;
+        all.shadow.bytes = shadowRangeBytes + indexBytes;
         fc.graph.markOutput(data.shadowRanges);
     }
     if (ao) {
         all.ao = lists;
         all.ao.ranges = data.aoRanges;
-        all.ao.bytes = tiles * 8 + (layers > 0 ? 0 : indexBytes);  // the indices are shared: counted once
+        all.ao.bytes = aoRangeBytes + (layers > 0 ? 0 : indexBytes);  // the indices are shared: counted once
         all.ao.scratchBytes = layers > 0 ? 0 : scratch;
         fc.graph.markOutput(data.aoRanges);
     }
