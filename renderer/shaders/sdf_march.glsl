@@ -226,6 +226,7 @@ struct RootSearch {
     // step-limit rule's candidate: its error and t); voxel is the world size of a stored unit.
     bool cells;
     ivec3 cell;
+    ivec3 cellBase, cellLast;  // the slot's first atlas texel, and its last cell (dims - 2)
     vec3 xo, xd;  // the ray in the field slot's voxel coordinates (cellRay)
 };
 
@@ -360,6 +361,8 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
             s.sb = 3.0e38;
             s.tp = t0;
             s.cell = clamp(ivec3(floor(xo + xd * start)), ivec3(0), dims - 2);
+            s.cellBase = ivec3(f.uvwOffset.xyz);
+            s.cellLast = dims - 2;
         }
     }
 #endif
@@ -500,10 +503,8 @@ void rootTake(inout RootSearch s, float sr, inout uint steps) {
 void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     ++steps;
     s.r += 1;
-    SdfField f = sdfFields[sdfObjects[s.obj].info.y];
-    ivec3 dims = ivec3(f.dims.xyz);
     vec3 xo = s.xo, xd = s.xd;
-    ivec3 base = ivec3(f.uvwOffset.xyz) + s.cell;
+    ivec3 base = s.cellBase + s.cell;
     float c[8];
     float cmin = 3.0e38;
     for (int k = 0; k < 8; ++k) {
@@ -538,7 +539,7 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
                                                 : (tb.y <= tb.z ? bvec3(false, true, false) : bvec3(false, false, true));
     ivec3 next = s.cell + ivec3(leaves) * ivec3(sign(xd));
     bool far = cmin * s.voxel >= s.eps && tOut >= s.t0 + 0.5 * s.eps;
-    if (tOut >= s.tb || any(lessThan(next, ivec3(0))) || any(greaterThan(next, dims - 2)) ||
+    if (tOut >= s.tb || any(lessThan(next, ivec3(0))) || any(greaterThan(next, s.cellLast)) ||
         (far && !s.scanned)) {
         s.tPast = tOut;
         rootFinish(s, -1.0);
@@ -793,20 +794,22 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
         uint dRoot = 0xffffffffu;
         bool nearestDone = true;  // the candidate's own search needs no second one
         RootSearch search;
-        rootStart(search, nearest, ro, rd, t, g_nearestRaw, true, eps, tMax, dTol, eps, false);
+        // The next search's object and parameters: first the candidate's own (its raw value here
+        // known), then each one the scan starts. One rootStart and one objectRawDistance in the
+        // loop: a CPU device runs every copy of that code in each round, needed or not.
+        uint sObj = nearest;
+        float sFirst = g_nearestRaw, sGate = eps, sEnd = tMax;
+        bool sKnown = true, sScanned = false, sUntilEnd = false;
         for (;;) {
-            // One candidate's search, to its end.
+            rootStart(search, sObj, ro, rd, t, sFirst, sKnown, sGate, sEnd, dTol, eps, sScanned);
+            search.untilEnd = sUntilEnd;
+            // One candidate's search, to its end: evaluations (a field's only for its first value,
+            // when not known), then a field walks its cells (stored values, no filter).
+            while ((!search.cells || search.r < 0) && rootNext(search, steps, stepLimit))
+                rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
 #ifdef SDF_FIELDS
-            if (search.cells) {
-                // A field's search walks its cells (stored values, no filter) after its first
-                // value (when not known).
-                if (search.r < 0 && rootNext(search, steps, stepLimit))
-                    rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
-                while (rootNext(search, steps, stepLimit)) cellStep(search, ro, rd, steps);
-            } else
+            while (search.cells && rootNext(search, steps, stepLimit)) cellStep(search, ro, rd, steps);
 #endif
-                while (rootNext(search, steps, stepLimit))
-                    rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
             // The search of `decision` is over.
             float tj = search.result;
             if (search.cells)  // the walk's nearest point, for the step-limit rule
@@ -838,8 +841,13 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 if (obj != nearest && dSecond >= gap) continue;
                 if (sdfBoxDistance(obj, sdfToLocal(obj, ro + rd * t)) >= gap) continue;
                 if (!candidateCrossed(uint(decision), obj, ro, rd, t, gap)) continue;
-                rootStart(search, obj, ro, rd, t, d, false, gap, min(dBest, tMax), dTol, eps, true);
-                search.untilEnd = dRoot != 0xffffffffu;
+                sObj = obj;
+                sFirst = d;
+                sKnown = false;
+                sGate = gap;
+                sEnd = min(dBest, tMax);
+                sScanned = true;
+                sUntilEnd = dRoot != 0xffffffffu;
                 started = true;
                 break;
             }
