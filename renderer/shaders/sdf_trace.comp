@@ -208,6 +208,13 @@ void main() {
     if (hit) g_evaluations += 4u;  // the normal's tetrahedron
     if (all(equal(pixel % 8, ivec2(0)))) g_evaluations += cone.y;  // the tile's cone, on its first pixel
     float work = float((trace.accel.x & kCountEvalsFlag) != 0u ? g_evaluations : steps);
+    // One set of stores for a hit and for "nothing hit" (a CPU device runs every store of the
+    // shader for each group of invocations, whichever branch its lanes take).
+    vec4 depth = vec4(0.0), normal = vec4(0.0), material = vec4(0.0), velocity = vec4(0.0);
+#ifdef ALBEDO
+    vec4 albedo = vec4(0.0);
+#endif
+    float id = -1.0;
     if (hit) {
         // Fields: at least half a voxel, so the gradient spans the trilinear cells around the
         // point instead of one cell's piecewise-linear facet.
@@ -215,39 +222,33 @@ void main() {
         vec3 n = objectNormal(hitObject, p, h);
         if (any(isnan(n))) n = -rd;
         uvec4 info = sdfObjects[hitObject].info;
-        imageStore(gbufferDepthImage, pixel, vec4(t / dirLength));
-        imageStore(gbufferNormalImage, pixel, vec4(octEncode(n), 0.0, 0.0));
+        depth = vec4(t / dirLength);
+        normal = vec4(octEncode(n), 0.0, 0.0);
         // b,a: the object + 1 for sdf_surface (0 past the 16-bit range: such objects keep the factor).
-        imageStore(gbufferMaterialImage, pixel, packMaterial(info.z, hitObject < 65535u ? hitObject + 1u : 0u));
+        material = packMaterial(info.z, hitObject < 65535u ? hitObject + 1u : 0u);
         vec3 local = sdfToLocal(hitObject, p);
         vec4 prevClip = view.prevViewProj * (sdfObjects[hitObject].prevModel * vec4(local, 1.0));
         vec4 clip = view.viewProj * vec4(p, 1.0);
-        vec2 velocity = prevClip.w > 1e-6 ? clipToPixel(clip) - clipToPixel(prevClip) : vec2(0.0);
-        imageStore(gbufferVelocityImage, pixel, vec4(velocity, 0.0, 0.0));
+        velocity = vec4(prevClip.w > 1e-6 ? clipToPixel(clip) - clipToPixel(prevClip) : vec2(0.0), 0.0, 0.0);
 #ifdef ALBEDO
-        imageStore(gbufferAlbedoImage, pixel, packAlbedo(materials[info.z].baseColor.rgb));
+        albedo = packAlbedo(materials[info.z].baseColor.rgb);
 #endif
-#ifdef AUX
-        imageStore(gbufferAuxImage, pixel, vec4(float(info.w), work, 0.0, 0.0));
-#endif
-    } else if (!raster) {
-        // Nothing else wrote this pixel this frame: the G-buffer's "nothing hit" values.
-        imageStore(gbufferDepthImage, pixel, vec4(0.0));
-        imageStore(gbufferNormalImage, pixel, vec4(0.0));
-        imageStore(gbufferMaterialImage, pixel, vec4(0.0));  // material 0, no SDF object
-        imageStore(gbufferVelocityImage, pixel, vec4(0.0));
+        id = float(info.w);
+    }
+    if (hit || !raster) {
+        // A hit, or nothing else wrote this pixel this frame: the G-buffer's "nothing hit" values.
+        imageStore(gbufferDepthImage, pixel, depth);
+        imageStore(gbufferNormalImage, pixel, normal);
+        imageStore(gbufferMaterialImage, pixel, material);  // material 0, no SDF object when nothing hit
+        imageStore(gbufferVelocityImage, pixel, velocity);
 #ifdef ALBEDO
-        imageStore(gbufferAlbedoImage, pixel, vec4(0.0));
-#endif
-#ifdef AUX
-        imageStore(gbufferAuxImage, pixel, vec4(-1.0, work, 0.0, 0.0));
+        imageStore(gbufferAlbedoImage, pixel, albedo);
 #endif
     }
 #ifdef AUX
-    else {
-        // A mesh pixel or the background behind a mesh pass: keep the id the mesh pass wrote, add
-        // the steps this ray took.
-        imageStore(gbufferAuxImage, pixel, vec4(imageLoad(gbufferAuxImage, pixel).x, work, 0.0, 0.0));
-    }
+    // A mesh pixel or the background behind a mesh pass keeps the id the mesh pass wrote; every
+    // pixel gets the steps its ray took.
+    if (!hit && raster) id = imageLoad(gbufferAuxImage, pixel).x;
+    imageStore(gbufferAuxImage, pixel, vec4(id, work, 0.0, 0.0));
 #endif
 }
