@@ -163,7 +163,8 @@ std::string entityName(ecs::Entity e) { return fmt::format("entity {}v{}", e.ind
 struct SceneRenderer::Impl {
     scene::TraceMode lastTraceMode = scene::TraceMode::Fullscreen;  // the mode buildGraph ran
     SdfBoxTraceReport lastBoxTrace;                                 // its draws (box mode)
-    double lastBoxCoverage = 0.0;                                   // boxCoverage of the traced objects
+    bool lastTraceObjectsUniform = false;  // sdf_trace read the objects as a uniform block
+    double lastBoxCoverage = 0.0;          // boxCoverage of the traced objects
     rhi::Device& device;
     std::string graphErrors;
     fg::FrameGraph graph;
@@ -930,6 +931,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
     // screen coverage. The box trace tests against the mesh pass's depth, which it then keeps.
     lastBoxTrace = {};
     lastTraceMode = scene::TraceMode::Fullscreen;
+    lastTraceObjectsUniform = false;
     const std::span<const GpuSdfObject> traced = std::span(sdfData.objects).first(sdfData.tracedCount);
     lastBoxCoverage =
         g.tracedSdfs > 0 ? boxCoverage(traced, cam.view, cam.proj, cam.nearPlane, cam.farPlane) : 0.0;
@@ -966,7 +968,7 @@ uint64_t SceneRenderer::Impl::buildGraph(const FrameDesc& desc, const CameraSetu
             box.proj = cam.unjitteredProj;  // the near-plane test and the coverage estimate
             lastBoxTrace = addSdfBoxTrace(fc, box);
         } else if (g.tracedSdfs > 0) {
-            addSdfTrace(fc, trace);  // occluders only: the effects still see them
+            lastTraceObjectsUniform = addSdfTrace(fc, trace);  // occluders only: the effects still see them
         }
         // Textured SDF materials: triplanar base colour and normal maps in object space.
         if (g.tracedSdfs > 0) addSdfSurface(fc, sdfSurfaceMaterials(g));
@@ -1119,6 +1121,7 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
     }
     st.triangles = triangles;
     st.traceMode = lastTraceMode;
+    st.traceObjectsUniform = lastTraceObjectsUniform;
     st.boxDraws = lastBoxTrace.boxes;
     st.nearDraws = lastBoxTrace.nearDraws;
     st.boxCoverage = lastBoxCoverage;

@@ -133,6 +133,9 @@ struct FrameStats {
     // objects the box trace drew as boxes / as near-plane triangles (inside or crossing the near
     // plane, unbounded). Fullscreen when the frame traced no SDF object.
     scene::TraceMode traceMode = scene::TraceMode::Fullscreen;
+    // The full-screen trace read the objects as a uniform block (its SDF_OBJECTS_UBO variants: at
+    // most kSdfObjectsUniformCapacity objects, renderer/features/sdf_scene.h), else as storage.
+    bool traceObjectsUniform = false;
     uint32_t boxDraws = 0;
     uint32_t nearDraws = 0;
     double boxCoverage = 0.0;  // the traced objects' boxes in screens (sdf_box_trace.h boxCoverage)

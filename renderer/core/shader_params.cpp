@@ -47,14 +47,15 @@ ShaderParams::Param* ShaderParams::find(std::string_view name, const char* what)
     return nullptr;
 }
 
-ShaderParams& ShaderParams::set(std::string_view name, rhi::BufferHandle buffer) {
+ShaderParams& ShaderParams::set(std::string_view name, rhi::BufferHandle buffer, uint64_t offset,
+                                uint64_t size) {
     Param* p = find(name, "a buffer");
     if (!p) return *this;
     if (!isBuffer(p->binding.type)) {
         fail(fmt::format("parameter '{}' is not a buffer", name));
         return *this;
     }
-    p->entry = rhi::BindGroupEntry::makeBuffer(p->binding.binding, buffer);
+    p->entry = rhi::BindGroupEntry::makeBuffer(p->binding.binding, buffer, offset, size);
     p->isSet = true;
     return *this;
 }

@@ -28,8 +28,9 @@ public:
     explicit ShaderParams(const rhi::ShaderDesc& compute);
     ShaderParams(const rhi::ShaderDesc& vertex, const rhi::ShaderDesc& fragment);
 
-    // Uniform and storage buffers (whole buffer).
-    ShaderParams& set(std::string_view name, rhi::BufferHandle buffer);
+    // Uniform and storage buffers: `size` bytes from `offset` (0: the whole buffer from offset).
+    ShaderParams& set(std::string_view name, rhi::BufferHandle buffer, uint64_t offset = 0,
+                      uint64_t size = 0);
     // Sampled textures; `mips` / `mipCount` select a mip range view (0: to the last mip).
     ShaderParams& set(std::string_view name, rhi::TextureHandle texture, rhi::SamplerHandle sampler,
                       uint32_t baseMip = 0, uint32_t mipCount = 0);

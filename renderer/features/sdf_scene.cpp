@@ -99,6 +99,12 @@ bool sdfShapePrimitivesOnly(const SdfSceneData& data) {
     return any;
 }
 
+bool sdfObjectsAsUniform(const rhi::DeviceInfo& device, uint32_t objectCount) {
+    const uint64_t block = uint64_t(kSdfObjectsUniformCapacity) * kObjectBytes;
+    return objectCount > 0 && objectCount <= kSdfObjectsUniformCapacity &&
+           device.limits.maxUniformBufferRange >= block;
+}
+
 void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
     SdfSceneBuffers& out = fc.board.add<SdfSceneBuffers>();
     rhi::TextureHandle atlas = data.atlas;
@@ -170,6 +176,7 @@ bool SdfSceneStore::reserve(fg::FrameGraph& graph, Buffer& b, uint64_t bytes, co
     rhi::BufferDesc desc;
     desc.size = capacity;
     desc.usage = rhi::BufferUsage::Storage | rhi::BufferUsage::CopyDst | rhi::BufferUsage::CopySrc;
+    if (&b == &m_objects) desc.usage = desc.usage | rhi::BufferUsage::Uniform;  // SDF_OBJECTS_UBO
     desc.debugName = name;
     b.handle = m_device.createBuffer(desc);
     if (b.handle) b.capacity = capacity;
@@ -344,8 +351,12 @@ void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf) {
 }
 
 void setSdfScene(ShaderParams& params, const fg::PassContext& ctx, const SdfSceneBuffers& sdf,
-                 rhi::SamplerHandle atlasSampler) {
-    params.set("SdfObjects", ctx.buffer(sdf.objects)).set("ShapeRecords", ctx.buffer(sdf.records));
+                 rhi::SamplerHandle atlasSampler, uint64_t objectsUniformBytes) {
+    if (objectsUniformBytes > 0)
+        params.set("SdfObjectsUniform", ctx.buffer(sdf.objects), 0, objectsUniformBytes);
+    else
+        params.set("SdfObjects", ctx.buffer(sdf.objects));
+    params.set("ShapeRecords", ctx.buffer(sdf.records));
     if (sdf.atlas.isValid())
         params.set("SdfFields", ctx.buffer(sdf.fields)).set("sdfAtlas", ctx.texture(sdf.atlas), atlasSampler);
 }

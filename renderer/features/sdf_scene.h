@@ -53,6 +53,15 @@ struct GpuSdfObject {
 inline constexpr uint32_t kSdfObjectCastsShadows = 1u;  // params.y: takes part in shadows and AO
 static_assert(sizeof(GpuSdfObject) == 256);
 
+// The objects of a frame with at most this many fit sdf_trace's SDF_OBJECTS_UBO variants, which
+// read them as a uniform block of this size (64 KiB; sdf_scene.glsl) instead of a storage buffer:
+// a CPU device loads a storage buffer lane by lane, a uniform block with one gather.
+inline constexpr uint32_t kSdfObjectsUniformCapacity = 256;
+
+// Whether the frame's objects are read as a uniform block (SDF_OBJECTS_UBO): they fit its
+// capacity and the device binds that much as one uniform buffer.
+bool sdfObjectsAsUniform(const rhi::DeviceInfo& device, uint32_t objectCount);
+
 // Largest magnitude stored for unbounded bounds (the shaders' slab test stays finite).
 inline constexpr float kSdfUnbounded = 1.0e30f;
 
@@ -171,7 +180,9 @@ rhi::SamplerHandle sdfAtlasSampler(GpuCache& cache, const SdfSceneBuffers& sdf);
 // Declares objects and records (and, in field frames, the field table and atlas) as shader reads.
 void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf);
 // Sets SdfObjects and ShapeRecords (and, in field frames, SdfFields and sdfAtlas with atlasSampler).
+// objectsUniformBytes > 0: the program reads the objects as the uniform block SdfObjectsUniform
+// (SDF_OBJECTS_UBO), bound over that many bytes; the pass also declares the objects UniformRead.
 void setSdfScene(ShaderParams& params, const fg::PassContext& ctx, const SdfSceneBuffers& sdf,
-                 rhi::SamplerHandle atlasSampler);
+                 rhi::SamplerHandle atlasSampler, uint64_t objectsUniformBytes = 0);
 
 }  // namespace penumbra::render

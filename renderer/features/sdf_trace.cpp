@@ -82,18 +82,18 @@ fg::BufferRef addConePrepass(FrameContext& fc, const SdfTraceDesc& desc, const S
 
 namespace {
 // The sdf_trace variant of these macros: its enumerator is the PascalCase of its macros in the
-// order ALBEDO, AUX, SDF_FIELDS, WORLD_CACHE, SHAPE_PRIMITIVES (sdf_trace.comp lists every
-// combination); the table of all 32 is built once, by name.
+// order ALBEDO, AUX, SDF_FIELDS, WORLD_CACHE, SHAPE_PRIMITIVES, SDF_OBJECTS_UBO (sdf_trace.comp lists
+// every combination); the table of all 64 is built once, by name.
 shaders::sdf_trace::Variant traceProgramVariant(bool albedo, bool aux, bool fields, bool cache,
-                                                bool primitives) {
+                                                bool primitives, bool objectsUbo) {
     namespace program = shaders::sdf_trace;
-    static const std::array<program::Variant, 32> kTable = [] {
-        static constexpr const char* kParts[5] = {"Albedo", "Aux", "SdfFields", "WorldCache",
-                                                  "ShapePrimitives"};
-        std::array<program::Variant, 32> table{};
-        for (uint32_t bits = 0; bits < 32; ++bits) {
+    static const std::array<program::Variant, 64> kTable = [] {
+        static constexpr const char* kParts[6] = {
+            "Albedo", "Aux", "SdfFields", "WorldCache", "ShapePrimitives", "SdfObjectsUbo"};
+        std::array<program::Variant, 64> table{};
+        for (uint32_t bits = 0; bits < 64; ++bits) {
             std::string name;
-            for (uint32_t k = 0; k < 5; ++k)
+            for (uint32_t k = 0; k < 6; ++k)
                 if ((bits >> k) & 1u) name += kParts[k];
             if (name.empty()) name = "Default";
             const char* const* names = program::kVariantNames;
@@ -106,11 +106,11 @@ shaders::sdf_trace::Variant traceProgramVariant(bool albedo, bool aux, bool fiel
         return table;
     }();
     return kTable[(albedo ? 1u : 0u) | (aux ? 2u : 0u) | (fields ? 4u : 0u) | (cache ? 8u : 0u) |
-                  (primitives ? 16u : 0u)];
+                  (primitives ? 16u : 0u) | (objectsUbo ? 32u : 0u)];
 }
 }  // namespace
 
-void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
+bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     namespace program = shaders::sdf_trace;
     struct Data {
         SceneBuffers scene;
@@ -127,9 +127,12 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const SdfWorldCacheView cacheIn = sdfWorldCacheBinding(fc.board, cacheRan);
     const bool cacheBound = (desc.accel.worldCache || desc.accel.idField) && cacheRan;
     // The WORLD_CACHE variants hold the cache lookup (a frame without the cache binds none), the
-    // SHAPE_PRIMITIVES ones evaluate one-shape programs without the interpreter.
-    const program::Variant variant =
-        traceProgramVariant(albedo, aux, sdfScene.atlas.isValid(), cacheBound, sdfScene.shapePrimitives);
+    // SHAPE_PRIMITIVES ones evaluate one-shape programs without the interpreter, the
+    // SDF_OBJECTS_UBO ones read the objects as a uniform block (bound over the frame's objects).
+    const bool objectsUbo = sdfObjectsAsUniform(fc.device.info(), sdfScene.objectCount);
+    const uint64_t objectsUboBytes = uint64_t(sdfScene.objectCount) * sizeof(GpuSdfObject);
+    const program::Variant variant = traceProgramVariant(albedo, aux, sdfScene.atlas.isValid(), cacheBound,
+                                                         sdfScene.shapePrimitives, objectsUbo);
     const rhi::ShaderDesc& cs = program::compute(variant);
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle sampler = sdfAtlasSampler(fc.cache, sdfScene);
@@ -166,11 +169,12 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
             readSdfScene(b, d.sdf);
+            if (objectsUbo) b.read(d.sdf.objects, rhi::Access::UniformRead);
             readSdfTileLists(b, d.tiles);
             if (cacheBound) readSdfWorldCache(b, d.cache);
         },
-        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, cacheBound](
-            const Data& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, cacheBound, objectsUbo,
+         objectsUboBytes](const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
@@ -182,7 +186,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 params.set("Materials", ctx.buffer(d.scene.materials))
                     .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
             if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
-            setSdfScene(params, ctx, d.sdf, sampler);
+            setSdfScene(params, ctx, d.sdf, sampler, objectsUbo ? objectsUboBytes : 0);
             // Without tile lists the object buffer stands in (read-only, already declared here).
             setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);
             if (cacheBound) setSdfWorldCache(params, ctx, d.cache);
@@ -191,6 +195,7 @@ void addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             ctx.cmd.pushConstants(&push, sizeof(push));
             dispatchOver(ctx.cmd, cs, width, height);
         });
+    return objectsUbo;
 }
 
 }  // namespace penumbra::render

@@ -4,7 +4,8 @@
 // shadows and AO.
 //
 // Use: define SDF_SCENE_SET, SDF_OBJECTS_BINDING and SHAPE_RECORDS_BINDING (and with SDF_FIELDS
-// also SDF_FIELDS_BINDING and SDF_ATLAS_BINDING), then include this file.
+// also SDF_FIELDS_BINDING and SDF_ATLAS_BINDING), then include this file. SDF_OBJECTS_UBO reads
+// the objects from a uniform block instead of a storage buffer.
 //
 // Distances are conservative: an object's world distance is its local (field or program) distance
 // times the smallest singular value of its model matrix's 3x3 part (boundsMin.w), which is exact
@@ -29,9 +30,19 @@ struct SdfObject {
 const uint SDF_KIND_SHAPES = 0u;
 const uint SDF_KIND_FIELD = 1u;
 
+#ifdef SDF_OBJECTS_UBO
+// The objects as a uniform block of kSdfObjectsUniformCapacity (renderer/features/sdf_scene.h)
+// records, bound over the frame's objects only (sdfObjectsAsUniform): a CPU device (llvmpipe) loads
+// a storage buffer lane by lane in a loop, a uniform block with one gather per component, and the
+// trace's candidate loop reads an object's transform and bounds at every step.
+layout(set = SDF_SCENE_SET, binding = SDF_OBJECTS_BINDING, std140) uniform SdfObjectsUniform {
+    SdfObject sdfObjects[256];
+};
+#else
 layout(set = SDF_SCENE_SET, binding = SDF_OBJECTS_BINDING, std430) readonly buffer SdfObjects {
     SdfObject sdfObjects[];
 };
+#endif
 
 #define SHAPE_RECORDS_SET SDF_SCENE_SET
 #include "shape_program.glsl"

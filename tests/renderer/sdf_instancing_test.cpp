@@ -12,8 +12,9 @@
 //   3. scale: 1000 instances of three shape programs (a golden per backend and Vulkan-vs-OpenGL
 //      parity; every instance seen in the ids; 100 of them moving: a 100-entry delta, same image as
 //      a fresh renderer) and 1000 distinct programs (1000 different records: no fixed limit;
-//      sampled objects are where they should be). DeltaAndFullUploadCost prints what the delta and
-//      the full upload cost (the threshold between them, renderer/features/sdf_scene.h).
+//      sampled objects are where they should be); 256 objects (read by the trace as a uniform
+//      block) and 257 (as a storage buffer) give the same image. DeltaAndFullUploadCost prints what
+//      the delta and the full upload cost (the threshold between them, renderer/features/sdf_scene.h).
 // Every criterion states its metric and threshold next to it; measured numbers are printed.
 #include <algorithm>
 #include <cmath>
@@ -596,6 +597,35 @@ TEST(SdfInstancingParity, ThousandInstancesVulkanMatchesOpenGL) {
         writePng(dir + "/instancing_1000.diff.png", d.diffImage);
     }
     EXPECT_TRUE(d.pass) << d.summary();
+}
+
+// sdf_trace reads the objects of a frame with at most kSdfObjectsUniformCapacity (256) of them as
+// a uniform block (its SDF_OBJECTS_UBO variants: a CPU device loads a storage buffer lane by lane),
+// of a larger frame as a storage buffer: the same records either way, so the same picture.
+TEST_P(SdfInstancing, UniformAndStorageObjectReadsAgree) {
+    static_assert(render::kSdfObjectsUniformCapacity == 256);
+    Scene s({0, 0, 0}, {0, 0, -1});
+    const assets::AssetId programs[] = {s.program(ShapeNode::sphere(0.11)),
+                                        s.program(ShapeNode::box(glm::dvec3(0.085)))};
+    for (int i = 0; i < 256; ++i) {
+        const int x = i % 16, y = i / 16;
+        s.object(programs[(x + y) % 2], {-2.25f + 0.3f * float(x), -2.25f + 0.3f * float(y), -6.0f},
+                 uint32_t(i));
+    }
+    SceneRenderer r(dev());
+    const FrameDesc d = s.frame(128, 96);
+    ImageRGBA8 uniform, storage;
+    ASSERT_TRUE(renderImage(s, r, d, uniform));
+    EXPECT_EQ(r.lastFrameStats().sdfObjects, 256u);
+    EXPECT_TRUE(r.lastFrameStats().traceObjectsUniform);  // threshold: 256 objects fit the block
+    // One more object, 50 units behind the camera (no ray or effect reaches it): 257 objects.
+    s.object(programs[0], {0.0f, 0.0f, 50.0f}, 0);
+    ASSERT_TRUE(renderImage(s, r, d, storage));
+    EXPECT_EQ(r.lastFrameStats().sdfObjects, 257u);
+    EXPECT_FALSE(r.lastFrameStats().traceObjectsUniform);  // threshold: 257 do not
+    // Metric: byte equality of the two images. Threshold: identical (the same records, read two ways).
+    const ImageDiff diff = compareImages(uniform, storage);
+    EXPECT_TRUE(diff.identical && !diff.sizeMismatch) << diff.summary();
 }
 
 // At scale: 100 of 1000 instances move in one frame; the delta carries exactly them and the image
