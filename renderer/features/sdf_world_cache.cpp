@@ -108,7 +108,7 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
 void readSdfWorldCache(fg::PassBuilder& b, const SdfWorldCacheView& view) {
     b.read(view.distance, rhi::Access::ShaderSampled);
     b.read(view.ids, rhi::Access::ShaderSampled);
-    b.read(view.levels, rhi::Access::ShaderRead);
+    b.read(view.levels, rhi::Access::UniformRead);  // the uniform block SdfCacheLevels
 }
 
 void setSdfWorldCache(ShaderParams& params, const fg::PassContext& ctx, const SdfWorldCacheView& view) {
@@ -154,7 +154,7 @@ void SdfWorldCache::addStandIn(FrameContext& fc) {
                           m_standInIds);
         rhi::BufferDesc b;
         b.size = 16;
-        b.usage = rhi::BufferUsage::Storage | rhi::BufferUsage::CopyDst;
+        b.usage = rhi::BufferUsage::Uniform | rhi::BufferUsage::CopyDst;
         b.debugName = "cache.levels_stand_in";
         m_standInLevels = m_device.createBuffer(b);
         const uint32_t zero[4] = {0u, 0u, 0u, 0u};  // a level count of 0: every lookup misses
@@ -166,7 +166,7 @@ void SdfWorldCache::addStandIn(FrameContext& fc) {
     standIn.view.ids =
         fc.graph.importPersistent("cache.ids_stand_in", m_standInIds, rhi::Access::ShaderSampled);
     standIn.view.levels =
-        fc.graph.importPersistent("cache.levels_stand_in", m_standInLevels, rhi::Access::ShaderRead);
+        fc.graph.importPersistent("cache.levels_stand_in", m_standInLevels, rhi::Access::UniformRead);
     standIn.view.sampler = nearestSampler(fc.cache);
 }
 

@@ -21,9 +21,12 @@ struct SdfCacheLevel {
 };
 
 #ifdef SDF_CACHE_SET
-layout(set = SDF_CACHE_SET, binding = SDF_CACHE_LEVELS_BINDING, std430) readonly buffer SdfCacheLevels {
+// A uniform block (at most 16 levels, 784 bytes, bound over the frame's levels): the lookup's level
+// index is the same in every lane, so a CPU device reads it with scalar loads (a storage buffer it
+// loads lane by lane in a loop at every lookup).
+layout(set = SDF_CACHE_SET, binding = SDF_CACHE_LEVELS_BINDING, std140) uniform SdfCacheLevels {
     uvec4 sdfCacheInfo;  // x level count, y resolution R
-    SdfCacheLevel sdfCacheLevels[];
+    SdfCacheLevel sdfCacheLevels[16];
 };
 layout(set = SDF_CACHE_SET, binding = SDF_CACHE_DISTANCE_BINDING) uniform sampler3D sdfCacheDistance;
 layout(set = SDF_CACHE_SET, binding = SDF_CACHE_IDS_BINDING) uniform usampler3D sdfCacheIds;
