@@ -3,7 +3,10 @@
 #include "renderer/features/sdf_ao.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <stdexcept>
+#include <string>
 
 #include <shaders/sdf_ao.h>
 
@@ -20,20 +23,32 @@ namespace {
 
 namespace program = shaders::sdf_ao;
 
-// SHAPE_PRIMITIVES (primitives): one-shape programs without the interpreter (sdfShapePrimitivesOnly).
-program::Variant aoVariant(scene::AoVariant v, bool fields, bool primitives) {
-    using V = program::Variant;
-    switch (v) {
-        case scene::AoVariant::MultiRay:
-            if (primitives) return fields ? V::MultiRaySdfFieldsShapePrimitives : V::MultiRayShapePrimitives;
-            return fields ? V::MultiRaySdfFields : V::MultiRay;
-        case scene::AoVariant::Cones:
-            if (primitives) return fields ? V::ConesSdfFieldsShapePrimitives : V::ConesShapePrimitives;
-            return fields ? V::ConesSdfFields : V::Cones;
-        default:
-            if (primitives) return fields ? V::SdfFieldsShapePrimitives : V::ShapePrimitives;
-            return fields ? V::SdfFields : V::Default;
-    }
+// SHAPE_PRIMITIVES (primitives): one-shape programs without the interpreter (sdfShapePrimitivesOnly);
+// SDF_OBJECTS_UBO (objectsUniform): the objects as a uniform block (sdfObjectsUniformBytes). The
+// enumerator is the PascalCase of the macros in the order MULTI_RAY / CONES, SDF_FIELDS,
+// SHAPE_PRIMITIVES, SDF_OBJECTS_UBO (sdf_ao.comp lists every combination); the table of all 24 is
+// built once, by name.
+program::Variant aoVariant(scene::AoVariant v, bool fields, bool primitives, bool objectsUniform) {
+    static const std::array<program::Variant, 24> kTable = [] {
+        static constexpr const char* kKinds[3] = {"", "MultiRay", "Cones"};
+        std::array<program::Variant, 24> table{};
+        for (uint32_t bits = 0; bits < 24; ++bits) {
+            std::string name = kKinds[bits / 8];
+            if (bits & 1u) name += "SdfFields";
+            if (bits & 2u) name += "ShapePrimitives";
+            if (bits & 4u) name += "SdfObjectsUbo";
+            if (name.empty()) name = "Default";
+            const char* const* names = program::kVariantNames;
+            const char* const* it =
+                std::find_if(names, names + program::kVariantCount, [&](const char* n) { return name == n; });
+            if (it == names + program::kVariantCount)
+                throw std::logic_error("sdf_ao.comp has no variant " + name);
+            table[bits] = program::Variant(uint32_t(it - names));
+        }
+        return table;
+    }();
+    const uint32_t kind = v == scene::AoVariant::MultiRay ? 1u : v == scene::AoVariant::Cones ? 2u : 0u;
+    return kTable[kind * 8u + (fields ? 1u : 0u) + (primitives ? 2u : 0u) + (objectsUniform ? 4u : 0u)];
 }
 
 // Step limit per ray: exact binary rays skip the stretches outside every bounds box, so few steps
@@ -57,8 +72,9 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
     const bool fields = sdfScene.atlas.isValid();
+    const uint64_t objectsUniform = sdfObjectsUniformBytes(fc.device.info(), sdfScene.objectCount);
     const rhi::ShaderDesc& cs =
-        program::compute(aoVariant(desc.ao.variant, fields, sdfScene.shapePrimitives));
+        program::compute(aoVariant(desc.ao.variant, fields, sdfScene.shapePrimitives, objectsUniform > 0));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
@@ -96,21 +112,21 @@ void addSdfAo(FrameContext& fc, const EffectsDesc& desc) {
             }
             b.write(d.out, rhi::Access::ShaderWrite);
             b.read(d.scene.view, rhi::Access::UniformRead);
-            readSdfScene(b, d.sdf);
+            readSdfScene(b, d.sdf, objectsUniform > 0);
             d.lists = lists;
             readSdfTileLists(b, d.lists);
             d.cache = cacheView;
             readSdfWorldCache(b, d.cache);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h](const Data& d,
-                                                                              fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, w, h, objectsUniform](
+            const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("aoImage", ctx.texture(d.out));
-            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            setSdfScene(params, ctx, d.sdf, atlasSampler, objectsUniform);
             setSdfTileLists(params, ctx, d.lists, d.sdf.objects);
             setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;

@@ -99,10 +99,11 @@ bool sdfShapePrimitivesOnly(const SdfSceneData& data) {
     return any;
 }
 
-bool sdfObjectsAsUniform(const rhi::DeviceInfo& device, uint32_t objectCount) {
+uint64_t sdfObjectsUniformBytes(const rhi::DeviceInfo& device, uint32_t objectCount) {
     const uint64_t block = uint64_t(kSdfObjectsUniformCapacity) * kObjectBytes;
-    return objectCount > 0 && objectCount <= kSdfObjectsUniformCapacity &&
-           device.limits.maxUniformBufferRange >= block;
+    const bool fits = objectCount > 0 && objectCount <= kSdfObjectsUniformCapacity &&
+                      device.limits.maxUniformBufferRange >= block;
+    return fits ? uint64_t(objectCount) * kObjectBytes : 0;
 }
 
 void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data) {
@@ -341,8 +342,9 @@ rhi::SamplerHandle sdfAtlasSampler(GpuCache& cache, const SdfSceneBuffers& sdf) 
     return cache.sampler(linear);
 }
 
-void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf) {
+void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf, bool objectsUniform) {
     b.read(sdf.objects, rhi::Access::ShaderRead);
+    if (objectsUniform) b.read(sdf.objects, rhi::Access::UniformRead);
     b.read(sdf.records, rhi::Access::ShaderRead);
     if (sdf.atlas.isValid()) {
         b.read(sdf.fields, rhi::Access::ShaderRead);

@@ -53,14 +53,17 @@ struct GpuSdfObject {
 inline constexpr uint32_t kSdfObjectCastsShadows = 1u;  // params.y: takes part in shadows and AO
 static_assert(sizeof(GpuSdfObject) == 256);
 
-// The objects of a frame with at most this many fit sdf_trace's SDF_OBJECTS_UBO variants, which
-// read them as a uniform block of this size (64 KiB; sdf_scene.glsl) instead of a storage buffer:
-// a CPU device loads a storage buffer lane by lane, a uniform block with one gather.
+// The objects of a frame with at most this many fit the SDF_OBJECTS_UBO variants (sdf_trace,
+// sdf_shadow, sdf_ao, the world-cache update), which read them as a uniform block of this size
+// (64 KiB; sdf_scene.glsl) instead of a storage buffer: a CPU device loads a storage buffer lane by
+// lane in a loop, a uniform block with one gather (or one scalar load when every lane reads the
+// same object).
 inline constexpr uint32_t kSdfObjectsUniformCapacity = 256;
 
-// Whether the frame's objects are read as a uniform block (SDF_OBJECTS_UBO): they fit its
-// capacity and the device binds that much as one uniform buffer.
-bool sdfObjectsAsUniform(const rhi::DeviceInfo& device, uint32_t objectCount);
+// The bytes the frame's objects take as a uniform block (SDF_OBJECTS_UBO), or 0 when they are read
+// as a storage buffer: more than kSdfObjectsUniformCapacity of them, none, or a device that cannot
+// bind the whole block as one uniform buffer.
+uint64_t sdfObjectsUniformBytes(const rhi::DeviceInfo& device, uint32_t objectCount);
 
 // Largest magnitude stored for unbounded bounds (the shaders' slab test stays finite).
 inline constexpr float kSdfUnbounded = 1.0e30f;
@@ -103,6 +106,20 @@ V sdfSceneVariant(const SdfSceneBuffers& sdf) {
     static constexpr V kVariants[4] = {V::Default, V::SdfFields, V::ShapePrimitives,
                                        V::SdfFieldsShapePrimitives};
     return kVariants[(sdf.atlas.isValid() ? 1 : 0) | (sdf.shapePrimitives ? 2 : 0)];
+}
+// The same with SDF_OBJECTS_UBO (a shader that also has those variants, sdfObjectsUniformBytes).
+template <class V>
+V sdfSceneVariant(const SdfSceneBuffers& sdf, bool objectsUniform) {
+    static constexpr V kVariants[8] = {V::Default,
+                                       V::SdfFields,
+                                       V::ShapePrimitives,
+                                       V::SdfFieldsShapePrimitives,
+                                       V::SdfObjectsUbo,
+                                       V::SdfFieldsSdfObjectsUbo,
+                                       V::ShapePrimitivesSdfObjectsUbo,
+                                       V::SdfFieldsShapePrimitivesSdfObjectsUbo};
+    return kVariants[(sdf.atlas.isValid() ? 1 : 0) | (sdf.shapePrimitives ? 2 : 0) |
+                     (objectsUniform ? 4 : 0)];
 }
 
 // The smallest singular value of m (0 for a singular matrix), computed in double with Jacobi
@@ -177,11 +194,13 @@ void addSdfSceneUpload(FrameContext& fc, const SdfSceneData& data, SdfSceneStore
 // What every pass that evaluates the SDF scene (trace, effects, field slice) declares and binds.
 // The atlas' trilinear, clamped sampler; invalid when the frame has no field (no atlas).
 rhi::SamplerHandle sdfAtlasSampler(GpuCache& cache, const SdfSceneBuffers& sdf);
-// Declares objects and records (and, in field frames, the field table and atlas) as shader reads.
-void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf);
+// Declares objects and records (and, in field frames, the field table and atlas) as shader reads;
+// objectsUniform: the objects as a uniform block too (SDF_OBJECTS_UBO).
+void readSdfScene(fg::PassBuilder& b, const SdfSceneBuffers& sdf, bool objectsUniform = false);
 // Sets SdfObjects and ShapeRecords (and, in field frames, SdfFields and sdfAtlas with atlasSampler).
-// objectsUniformBytes > 0: the program reads the objects as the uniform block SdfObjectsUniform
-// (SDF_OBJECTS_UBO), bound over that many bytes; the pass also declares the objects UniformRead.
+// objectsUniformBytes > 0 (sdfObjectsUniformBytes): the program reads the objects as the uniform
+// block SdfObjectsUniform (SDF_OBJECTS_UBO), bound over that many bytes (readSdfScene's
+// objectsUniform declares them UniformRead).
 void setSdfScene(ShaderParams& params, const fg::PassContext& ctx, const SdfSceneBuffers& sdf,
                  rhi::SamplerHandle atlasSampler, uint64_t objectsUniformBytes = 0);
 

@@ -45,7 +45,9 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
     };
     const GBuffer& gbuffer = *fc.board.find<GBuffer>();
     const SdfSceneBuffers& sdfScene = *fc.board.find<SdfSceneBuffers>();
-    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(sdfScene));
+    const uint64_t objectsUniform = sdfObjectsUniformBytes(fc.device.info(), sdfScene.objectCount);
+    const rhi::ShaderDesc& cs =
+        program::compute(sdfSceneVariant<program::Variant>(sdfScene, objectsUniform > 0));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, sdfScene);
     const rhi::SamplerHandle nearest = gbufferSampler(fc.cache);
@@ -83,14 +85,14 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
             b.read(d.scene.view, rhi::Access::UniformRead);
             b.read(d.scene.scene, rhi::Access::UniformRead);
             b.read(d.scene.lights, rhi::Access::ShaderRead);
-            readSdfScene(b, d.sdf);
+            readSdfScene(b, d.sdf, objectsUniform > 0);
             d.lists = lists;
             readSdfTileLists(b, d.lists);
             d.cache = cacheView;
             readSdfWorldCache(b, d.cache);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers](const Data& d,
-                                                                                      fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, nearest, push, size, layers, objectsUniform](
+            const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             params.set("View", ctx.buffer(d.scene.view))
@@ -99,7 +101,7 @@ void addSdfShadow(FrameContext& fc, const EffectsDesc& desc) {
                 .set("gbufferDepth", ctx.texture(d.depth), nearest)
                 .set("gbufferNormal", ctx.texture(d.normal), nearest)
                 .setStorage("shadowImage", ctx.texture(d.out));
-            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            setSdfScene(params, ctx, d.sdf, atlasSampler, objectsUniform);
             setSdfTileLists(params, ctx, d.lists, d.sdf.objects);
             setSdfWorldCache(params, ctx, d.cache);
             if (!params.bind(ctx.cmd, cache, pipeline)) return;

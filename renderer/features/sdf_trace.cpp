@@ -129,8 +129,8 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     // The WORLD_CACHE variants hold the cache lookup (a frame without the cache binds none), the
     // SHAPE_PRIMITIVES ones evaluate one-shape programs without the interpreter, the
     // SDF_OBJECTS_UBO ones read the objects as a uniform block (bound over the frame's objects).
-    const bool objectsUbo = sdfObjectsAsUniform(fc.device.info(), sdfScene.objectCount);
-    const uint64_t objectsUboBytes = uint64_t(sdfScene.objectCount) * sizeof(GpuSdfObject);
+    const uint64_t objectsUboBytes = sdfObjectsUniformBytes(fc.device.info(), sdfScene.objectCount);
+    const bool objectsUbo = objectsUboBytes > 0;
     const program::Variant variant = traceProgramVariant(albedo, aux, sdfScene.atlas.isValid(), cacheBound,
                                                          sdfScene.shapePrimitives, objectsUbo);
     const rhi::ShaderDesc& cs = program::compute(variant);
@@ -168,12 +168,11 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 if (t.isValid()) b.write(t, rw);
             b.read(d.scene.view, rhi::Access::UniformRead);
             if (albedo) b.read(d.scene.materials, rhi::Access::ShaderRead);
-            readSdfScene(b, d.sdf);
-            if (objectsUbo) b.read(d.sdf.objects, rhi::Access::UniformRead);
+            readSdfScene(b, d.sdf, objectsUbo);
             readSdfTileLists(b, d.tiles);
             if (cacheBound) readSdfWorldCache(b, d.cache);
         },
-        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, cacheBound, objectsUbo,
+        [&cache = fc.cache, &cs, pipeline, sampler, push, width, height, albedo, aux, cacheBound,
          objectsUboBytes](const Data& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
@@ -186,7 +185,7 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 params.set("Materials", ctx.buffer(d.scene.materials))
                     .setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
             if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
-            setSdfScene(params, ctx, d.sdf, sampler, objectsUbo ? objectsUboBytes : 0);
+            setSdfScene(params, ctx, d.sdf, sampler, objectsUboBytes);
             // Without tile lists the object buffer stands in (read-only, already declared here).
             setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);
             if (cacheBound) setSdfWorldCache(params, ctx, d.cache);

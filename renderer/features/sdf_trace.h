@@ -64,7 +64,7 @@ struct SdfTraceDesc {
 // Adds the pass. Reads SceneBuffers (view; materials when the frame has albedo), SdfSceneBuffers
 // and, when present and enabled, SdfCullLists::primary and SdfWorldCacheView; reads and writes the
 // GBuffer as storage images. Returns whether the pass reads the objects as a uniform block (the
-// SDF_OBJECTS_UBO variants: at most kSdfObjectsUniformCapacity objects, sdfObjectsAsUniform).
+// SDF_OBJECTS_UBO variants: at most kSdfObjectsUniformCapacity objects, sdfObjectsUniformBytes).
 bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc);
 
 // The ALBEDO x AUX x SDF_FIELDS x SHAPE_PRIMITIVES variant of a trace program (sdf_box_trace;

@@ -67,14 +67,16 @@ rhi::SamplerHandle nearestSampler(GpuCache& cache) {
 // One compute pass over jobs [first, first + count) of the frame's job buffer.
 void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uint32_t first, uint32_t count,
                    uint32_t objectCount) {
-    const rhi::ShaderDesc& cs = program::compute(sdfSceneVariant<program::Variant>(in.sdf));
+    const uint64_t objectsUniform = sdfObjectsUniformBytes(fc.device.info(), in.sdf.objectCount);
+    const rhi::ShaderDesc& cs =
+        program::compute(sdfSceneVariant<program::Variant>(in.sdf, objectsUniform > 0));
     const rhi::PipelineHandle pipeline = fc.cache.computePipeline(cs);
     const rhi::SamplerHandle atlasSampler = sdfAtlasSampler(fc.cache, in.sdf);
     fc.graph.addPass<UpdateData>(
         name, fg::PassKind::Compute,
         [&](fg::PassBuilder& b, UpdateData& d) {
             d = in;
-            readSdfScene(b, d.sdf);
+            readSdfScene(b, d.sdf, objectsUniform > 0);
             b.read(d.jobs, rhi::Access::ShaderRead);
             b.read(d.list, rhi::Access::ShaderRead);
             b.read(d.flags, rhi::Access::ShaderRead);
@@ -83,11 +85,11 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
             b.write(d.view.distance, rw);
             b.write(d.view.ids, rw);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, first, count, objectCount](const UpdateData& d,
-                                                                                    fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, first, count, objectCount, objectsUniform](
+            const UpdateData& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
-            setSdfScene(params, ctx, d.sdf, atlasSampler);
+            setSdfScene(params, ctx, d.sdf, atlasSampler, objectsUniform);
             params.set("CacheJobs", ctx.buffer(d.jobs))
                 .set("CacheObjectFlags", ctx.buffer(d.flags))
                 .set("CacheObjectList", ctx.buffer(d.list))

@@ -32,7 +32,7 @@ const uint SDF_KIND_FIELD = 1u;
 
 #ifdef SDF_OBJECTS_UBO
 // The objects as a uniform block of kSdfObjectsUniformCapacity (renderer/features/sdf_scene.h)
-// records, bound over the frame's objects only (sdfObjectsAsUniform): a CPU device (llvmpipe) loads
+// records, bound over the frame's objects only (sdfObjectsUniformBytes): a CPU device (llvmpipe) loads
 // a storage buffer lane by lane in a loop, a uniform block with one gather per component, and the
 // trace's candidate loop reads an object's transform and bounds at every step.
 layout(set = SDF_SCENE_SET, binding = SDF_OBJECTS_BINDING, std140) uniform SdfObjectsUniform {

@@ -20,7 +20,7 @@
 // casting object at every step (acceleration.culling off). kCache / kIdField: the world cache and
 // id field in the march (sdf_cone.glsl says how; set only when the cache ran this frame).
 #version 450
-#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES SDF_FIELDS+SDF_OBJECTS_UBO SHAPE_PRIMITIVES+SDF_OBJECTS_UBO SDF_FIELDS+SHAPE_PRIMITIVES+SDF_OBJECTS_UBO SDF_OBJECTS_UBO
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 1) in;
 
 #include "scene.glsl"

@@ -14,7 +14,7 @@
 // trilinear interpolant, which may lie up to about a voxel nearer than the mesh), raised outside
 // the object's bounds box to the distance to that box (the solid and that zero set lie in it).
 #version 450
-#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES
+#pragma penumbra_variants SDF_FIELDS SHAPE_PRIMITIVES SDF_FIELDS+SHAPE_PRIMITIVES SDF_FIELDS+SDF_OBJECTS_UBO SHAPE_PRIMITIVES+SDF_OBJECTS_UBO SDF_FIELDS+SHAPE_PRIMITIVES+SDF_OBJECTS_UBO SDF_OBJECTS_UBO
 layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
 
 #define SDF_SCENE_SET 2

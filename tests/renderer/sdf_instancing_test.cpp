@@ -599,9 +599,10 @@ TEST(SdfInstancingParity, ThousandInstancesVulkanMatchesOpenGL) {
     EXPECT_TRUE(d.pass) << d.summary();
 }
 
-// sdf_trace reads the objects of a frame with at most kSdfObjectsUniformCapacity (256) of them as
-// a uniform block (its SDF_OBJECTS_UBO variants: a CPU device loads a storage buffer lane by lane),
-// of a larger frame as a storage buffer: the same records either way, so the same picture.
+// The trace, shadows, AO and the world-cache update read the objects of a frame with at most
+// kSdfObjectsUniformCapacity (256) of them as a uniform block (their SDF_OBJECTS_UBO variants: a
+// CPU device loads a storage buffer lane by lane), of a larger frame as a storage buffer: the same
+// records either way, so the same picture (sun shadows and cone AO on).
 TEST_P(SdfInstancing, UniformAndStorageObjectReadsAgree) {
     static_assert(render::kSdfObjectsUniformCapacity == 256);
     Scene s({0, 0, 0}, {0, 0, -1});
@@ -612,14 +613,17 @@ TEST_P(SdfInstancing, UniformAndStorageObjectReadsAgree) {
         s.object(programs[(x + y) % 2], {-2.25f + 0.3f * float(x), -2.25f + 0.3f * float(y), -6.0f},
                  uint32_t(i));
     }
+    s.world.get<ecs::Light>(s.light)->castShadows = true;
     SceneRenderer r(dev());
-    const FrameDesc d = s.frame(128, 96);
+    FrameDesc d = s.frame(128, 96);
+    d.settings.ao.variant = scene::AoVariant::Cones;
     ImageRGBA8 uniform, storage;
     ASSERT_TRUE(renderImage(s, r, d, uniform));
     EXPECT_EQ(r.lastFrameStats().sdfObjects, 256u);
     EXPECT_TRUE(r.lastFrameStats().traceObjectsUniform);  // threshold: 256 objects fit the block
-    // One more object, 50 units behind the camera (no ray or effect reaches it): 257 objects.
-    s.object(programs[0], {0.0f, 0.0f, 50.0f}, 0);
+    // One more object, far behind the camera and below (no ray, shadow ray or AO cone reaches it):
+    // 257 objects.
+    s.object(programs[0], {0.0f, -40.0f, 50.0f}, 0);
     ASSERT_TRUE(renderImage(s, r, d, storage));
     EXPECT_EQ(r.lastFrameStats().sdfObjects, 257u);
     EXPECT_FALSE(r.lastFrameStats().traceObjectsUniform);  // threshold: 257 do not
