@@ -13,6 +13,10 @@
 // left unset makes bind() log one error naming the program and the parameter and return false.
 #pragma once
 
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -63,5 +67,31 @@ private:
 // Workgroups covering `width` x `height` (x `depth`) invocations with the shader's local size.
 void dispatchOver(rhi::CommandList& cmd, const rhi::ShaderDesc& compute, uint32_t width, uint32_t height,
                   uint32_t depth = 1);
+
+// A generated program's variants (shaders::X::Variant) indexed by a bit set: bit k of the index
+// adds parts[k], the PascalCase of one macro, to the enumerator's name after `prefix` (an
+// exclusive choice such as "MultiRay", or ""); the enumerator names its macros in the order the
+// shader's #pragma penumbra_variants lists them, and no part at all is "Default". Built once per
+// pass from the generated kVariantNames; a combination the shader does not declare throws
+// std::logic_error naming `program`.
+template <class Variant, std::size_t Parts>
+std::array<Variant, (std::size_t(1) << Parts)> variantTable(const char* program, const char* const* names,
+                                                            uint32_t count,
+                                                            const std::array<const char*, Parts>& parts,
+                                                            const char* prefix = "") {
+    std::array<Variant, (std::size_t(1) << Parts)> table{};
+    for (uint32_t bits = 0; bits < table.size(); ++bits) {
+        std::string name = prefix;
+        for (uint32_t k = 0; k < Parts; ++k)
+            if ((bits >> k) & 1u) name += parts[k];
+        if (name.empty()) name = "Default";
+        uint32_t found = count;
+        for (uint32_t v = 0; v < count && found == count; ++v)
+            if (name == names[v]) found = v;
+        if (found == count) throw std::logic_error(std::string(program) + " has no variant " + name);
+        table[bits] = Variant(found);
+    }
+    return table;
+}
 
 }  // namespace penumbra::render

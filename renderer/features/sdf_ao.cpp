@@ -5,8 +5,6 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <stdexcept>
-#include <string>
 
 #include <shaders/sdf_ao.h>
 
@@ -30,20 +28,14 @@ namespace program = shaders::sdf_ao;
 // built once, by name.
 program::Variant aoVariant(scene::AoVariant v, bool fields, bool primitives, bool objectsUniform) {
     static const std::array<program::Variant, 24> kTable = [] {
-        static constexpr const char* kKinds[3] = {"", "MultiRay", "Cones"};
+        static constexpr std::array<const char*, 3> kParts = {"SdfFields", "ShapePrimitives",
+                                                              "SdfObjectsUbo"};
         std::array<program::Variant, 24> table{};
-        for (uint32_t bits = 0; bits < 24; ++bits) {
-            std::string name = kKinds[bits / 8];
-            if (bits & 1u) name += "SdfFields";
-            if (bits & 2u) name += "ShapePrimitives";
-            if (bits & 4u) name += "SdfObjectsUbo";
-            if (name.empty()) name = "Default";
-            const char* const* names = program::kVariantNames;
-            const char* const* it =
-                std::find_if(names, names + program::kVariantCount, [&](const char* n) { return name == n; });
-            if (it == names + program::kVariantCount)
-                throw std::logic_error("sdf_ao.comp has no variant " + name);
-            table[bits] = program::Variant(uint32_t(it - names));
+        const char* const kinds[3] = {"", "MultiRay", "Cones"};
+        for (uint32_t kind = 0; kind < 3; ++kind) {
+            const auto part = variantTable<program::Variant, 3>("sdf_ao.comp", program::kVariantNames,
+                                                                program::kVariantCount, kParts, kinds[kind]);
+            std::copy(part.begin(), part.end(), table.begin() + kind * 8);
         }
         return table;
     }();

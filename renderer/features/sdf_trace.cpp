@@ -1,9 +1,6 @@
 #include "renderer/features/sdf_trace.h"
 
-#include <algorithm>
 #include <array>
-#include <stdexcept>
-#include <string>
 
 #include <shaders/sdf_cone_prepass.h>
 #include <shaders/sdf_trace.h>
@@ -87,24 +84,9 @@ namespace {
 shaders::sdf_trace::Variant traceProgramVariant(bool albedo, bool aux, bool fields, bool cache,
                                                 bool primitives, bool objectsUbo) {
     namespace program = shaders::sdf_trace;
-    static const std::array<program::Variant, 64> kTable = [] {
-        static constexpr const char* kParts[6] = {
-            "Albedo", "Aux", "SdfFields", "WorldCache", "ShapePrimitives", "SdfObjectsUbo"};
-        std::array<program::Variant, 64> table{};
-        for (uint32_t bits = 0; bits < 64; ++bits) {
-            std::string name;
-            for (uint32_t k = 0; k < 6; ++k)
-                if ((bits >> k) & 1u) name += kParts[k];
-            if (name.empty()) name = "Default";
-            const char* const* names = program::kVariantNames;
-            const char* const* it =
-                std::find_if(names, names + program::kVariantCount, [&](const char* n) { return name == n; });
-            if (it == names + program::kVariantCount)
-                throw std::logic_error("sdf_trace.comp has no variant " + name);
-            table[bits] = program::Variant(uint32_t(it - names));
-        }
-        return table;
-    }();
+    static const std::array<program::Variant, 64> kTable = variantTable<program::Variant, 6>(
+        "sdf_trace.comp", program::kVariantNames, program::kVariantCount,
+        {"Albedo", "Aux", "SdfFields", "WorldCache", "ShapePrimitives", "SdfObjectsUbo"});
     return kTable[(albedo ? 1u : 0u) | (aux ? 2u : 0u) | (fields ? 4u : 0u) | (cache ? 8u : 0u) |
                   (primitives ? 16u : 0u) | (objectsUbo ? 32u : 0u)];
 }
