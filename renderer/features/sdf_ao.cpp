@@ -20,6 +20,8 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_ao;
+// The objects' uniform block holds kSdfObjectsUniformCapacity records (sdf_scene.glsl).
+static_assert(sizeof(program::SdfObjectsUniform) == kSdfObjectsUniformCapacity * sizeof(GpuSdfObject));
 
 // SHAPE_PRIMITIVES (primitives): one-shape programs without the interpreter (sdfShapePrimitivesOnly);
 // SDF_OBJECTS_UBO (objectsUniform): the objects as a uniform block (sdfObjectsUniformBytes). The

@@ -20,6 +20,8 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_shadow;
+// The objects' uniform block holds kSdfObjectsUniformCapacity records (sdf_scene.glsl).
+static_assert(sizeof(program::SdfObjectsUniform) == kSdfObjectsUniformCapacity * sizeof(GpuSdfObject));
 
 struct ShadowSize {
     uint32_t width = 0, height = 0;  // one layer

@@ -12,6 +12,12 @@
 
 namespace penumbra::render {
 
+// The shader-side sizes of what the C++ writes and chooses: the objects' uniform block holds
+// kSdfObjectsUniformCapacity records, the level table a header and every level.
+static_assert(sizeof(shaders::sdf_trace::SdfObjectsUniform) ==
+              kSdfObjectsUniformCapacity * sizeof(GpuSdfObject));
+static_assert(sizeof(shaders::sdf_trace::SdfCacheLevels) >= 16 + kMaxCacheLevels * sizeof(CacheLevelGpu));
+
 namespace {
 
 // trace.accel.x in sdf_trace.comp.

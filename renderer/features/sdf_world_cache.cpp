@@ -12,6 +12,8 @@ namespace penumbra::render {
 namespace {
 
 namespace program = shaders::sdf_world_cache_update;
+// The objects' uniform block holds kSdfObjectsUniformCapacity records (sdf_scene.glsl).
+static_assert(sizeof(program::SdfObjectsUniform) == kSdfObjectsUniformCapacity * sizeof(GpuSdfObject));
 
 // The clipmap (an engine-free module) keeps defaults of its own; they are the scene's.
 constexpr ClipmapSettings kClipmapDefaults{};

@@ -134,7 +134,7 @@ void WorldCacheClipmap::update(const ClipmapSettings& settings, glm::vec3 camera
 // count only grows while the layout lives). Then the camera-centred, snapped window origins.
 void WorldCacheClipmap::chooseLayout(const ClipmapSettings& s, glm::vec3 camera) {
     const uint32_t res = std::max(kCacheBrick, s.resolution / kCacheBrick * kCacheBrick);
-    const uint32_t maxLevels = std::clamp(s.levels, 1u, 15u);
+    const uint32_t maxLevels = std::clamp(s.levels, 1u, kMaxCacheLevels);
     std::vector<float> extents;
     glm::vec3 lo(1e30f), hi(-1e30f);
     for (size_t i = 0; i < m_lo.size(); ++i) {

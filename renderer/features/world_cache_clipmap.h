@@ -79,8 +79,8 @@ struct ClipmapObject {
 
 struct ClipmapSettings {
     uint32_t levels = 4;
-    uint32_t resolution = 64;  // rounded down to a multiple of 8 (at least 8)
-    float voxel = 0.0f;        // h_0; 0: from the scene
+    uint32_t resolution = 64;      // rounded down to a multiple of 8 (at least 8)
+    float voxel = 0.0f;            // h_0; 0: from the scene
     uint32_t budgetVoxels = 2048;  // scene::AccelerationSettings::cacheBudgetVoxels
 };
 
@@ -94,7 +94,10 @@ struct CacheJob {
 };
 static_assert(sizeof(CacheJob) == 48);
 
-// One level as the shaders see it (48 bytes, std430; renderer/shaders/sdf_world_cache.glsl).
+// The most clipmap levels a cache has (the shaders' level table holds 16).
+inline constexpr uint32_t kMaxCacheLevels = 15;
+
+// One level as the shaders see it (48 bytes, std140 and std430; renderer/shaders/sdf_world_cache.glsl).
 struct CacheLevelGpu {
     glm::ivec4 origin;  // xyz window origin in voxels, w first z texel of the level (level * R)
     glm::ivec4 wrap;    // xyz origin mod R (0..R-1): texel of the origin voxel
