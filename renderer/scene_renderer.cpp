@@ -1117,6 +1117,12 @@ void SceneRenderer::Impl::finishFrame(const FrameDesc& desc, const CameraSetup& 
             keptBuffers["sdf.tile_ranges"] = {graph.physicalBuffer(lists->primary.ranges), rangeBytes};
             keptBuffers["sdf.tile_indices"] = {graph.physicalBuffer(lists->primary.indices),
                                                lists->primary.bytes - rangeBytes};
+            if (lists->primary.dispatch.isValid())
+                keptBuffers["sdf.tile_dispatch"] = {
+                    graph.physicalBuffer(lists->primary.dispatch),
+                    (kSdfTileDispatchHeader +
+                     uint64_t(kSdfTileClasses) * lists->primary.tilesX * lists->primary.tilesY) *
+                        4};
         }
     }
     st.triangles = triangles;

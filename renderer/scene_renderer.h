@@ -187,8 +187,9 @@ public:
     // Reads back the whole world SDF cache of the last frame (tests); false when it did not run.
     bool readWorldCache(WorldCacheReadback& out, std::string& error);
 
-    // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices" (the
-    // primary tile lists, renderer/features/sdf_cull.h, when the frame built them), and with the
+    // Reads back a buffer the last frame kept for tests: "sdf.tile_ranges", "sdf.tile_indices",
+    // "sdf.tile_dispatch" (the primary tile lists and the trace's tile classes,
+    // renderer/features/sdf_cull.h, when the frame built them), and with the
     // shadow / AO lists (renderer/features/sdf_effects_cull.h) "sdf.shadow_tile_ranges",
     // "sdf.ao_tile_ranges", "sdf.effects_tile_indices", "sdf.effects_cull_counters", and
     // "sdf.objects" (the frame's GpuSdfObject array, renderer/features/sdf_scene.h); false otherwise.

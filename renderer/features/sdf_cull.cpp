@@ -133,6 +133,7 @@ fg::BufferRef addTileBounds(FrameContext& fc, const SdfTileCullDesc& desc, uint3
 // One level of the lists: its input (every object, or the coarse level's lists) and output.
 struct CullLevel {
     fg::BufferRef objects, counter;  // TileCullObject[]; the reservation counters (uint[4])
+    fg::BufferRef dispatch;          // the fine level's tile dispatch (SdfTileLists::dispatch)
     fg::BufferRef ranges, indices;   // in: the coarse lists (invalid: none); out: this level's
     uint32_t count = 0;              // objects
     uint64_t capacity = 0;           // entries of this level's indices
@@ -146,7 +147,7 @@ struct CullLevel {
 CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const CullLevel& in, const char* pass,
                        const std::string& prefix) {
     struct Data {
-        fg::BufferRef view, objects, counter, inRanges, inIndices, ranges, indices;
+        fg::BufferRef view, objects, counter, inRanges, inIndices, ranges, indices, dispatch;
     };
     // One invocation per tile, a workgroup per 8x8 tiles (at the fine level: per coarse tile).
     static_assert(kCoarse == 8, "sdf_tile_cull.comp's workgroups are 8x8 tiles, one coarse tile");
@@ -166,6 +167,7 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
             d.view = b.read(fc.board.find<SceneBuffers>()->view, rhi::Access::UniformRead);  // tile planes
             d.objects = b.read(in.objects, rhi::Access::ShaderRead);
             d.counter = b.write(in.counter, rw);
+            d.dispatch = b.write(in.dispatch, rw);  // written by the fine level only
             // Without input lists the object records stand in for them (bound, never read).
             d.inRanges = in.ranges.isValid() ? b.read(in.ranges, rhi::Access::ShaderRead) : d.objects;
             d.inIndices = in.indices.isValid() ? b.read(in.indices, rhi::Access::ShaderRead) : d.objects;
@@ -181,13 +183,15 @@ CullLevel addCullLevel(FrameContext& fc, const SdfTileCullDesc& desc, const Cull
                 .set("SdfTileCoarseRanges", ctx.buffer(d.inRanges))
                 .set("SdfTileCoarseIndices", ctx.buffer(d.inIndices))
                 .set("SdfTileRangesOut", ctx.buffer(d.ranges))
-                .set("SdfTileIndicesOut", ctx.buffer(d.indices));
+                .set("SdfTileIndicesOut", ctx.buffer(d.indices))
+                .set("SdfTileDispatchOut", ctx.buffer(d.dispatch));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
             ctx.cmd.pushConstants(&push, sizeof(push));
             ctx.cmd.dispatch(groups.x, groups.y);
         });
     CullLevel out = in;
     out.counter = data.counter;
+    out.dispatch = data.dispatch;
     out.ranges = data.ranges;
     out.indices = data.indices;
     out.bytes = rangeBytes + indexBytes;
@@ -213,25 +217,37 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     uint64_t boundsBytes = 0;
     const fg::BufferRef objects = addTileBounds(fc, desc, count, lists.tilesX, lists.tilesY, boundsBytes);
     constexpr uint64_t kCounterBytes = 16;
+    const uint64_t dispatchBytes =
+        (kSdfTileDispatchHeader + uint64_t(kSdfTileClasses) * lists.tilesX * lists.tilesY) * 4;
     struct Clear {
-        fg::BufferRef counter;
+        fg::BufferRef counter, dispatch;
     };
     const Clear& clear = fc.graph.addPass<Clear>(
         "sdf_tile_cull_clear", fg::PassKind::Transfer,
         [&](fg::PassBuilder& b, Clear& d) {
             d.counter = b.write(storageBuffer(b, "sdf.tile_counter", kCounterBytes), rhi::Access::CopyDst);
+            d.dispatch = b.write(storageBuffer(b, "sdf.tile_dispatch", dispatchBytes), rhi::Access::CopyDst);
         },
         [](const Clear& d, fg::PassContext& ctx) {
             ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, kCounterBytes, 0u);
+            // Every class's dispatch record (0 tiles, 1, 1); the tile indices are written before
+            // they are read.
+            const rhi::BufferHandle dispatch = ctx.buffer(d.dispatch);
+            for (uint32_t c = 0; c < kSdfTileClasses; ++c) {
+                const uint64_t record = sdfTileDispatchRecord(SdfTileClass(c));
+                ctx.cmd.fillBuffer(dispatch, record, 4, 0u);
+                ctx.cmd.fillBuffer(dispatch, record + 4, 8, 1u);
+            }
         });
 
     // Coarse tiles from every object (counter 0), then the 8x8 tiles from their coarse tile's list
     // (counter 1).
     const glm::uvec2 coarseTiles = (glm::uvec2(lists.tilesX, lists.tilesY) + (kCoarse - 1)) / kCoarse;
-    CullLevel level{objects, clear.counter, {}, {}, count, coarse, coarseTiles, kCoarse, 0};
+    CullLevel level{objects, clear.counter, clear.dispatch, {}, {}, count, coarse, coarseTiles, kCoarse, 0};
     const CullLevel coarseLists = addCullLevel(fc, desc, level, "sdf_tile_cull_coarse", "sdf.tile_coarse");
     level = {objects,
              coarseLists.counter,
+             coarseLists.dispatch,
              coarseLists.ranges,
              coarseLists.indices,
              count,
@@ -242,10 +258,12 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
     const CullLevel fineLists = addCullLevel(fc, desc, level, "sdf_tile_cull", "sdf.tile");
     lists.ranges = fineLists.ranges;
     lists.indices = fineLists.indices;
+    lists.dispatch = fineLists.dispatch;
     lists.bytes = fineLists.bytes;
-    lists.scratchBytes = boundsBytes + kCounterBytes + coarseLists.bytes;
+    lists.scratchBytes = boundsBytes + kCounterBytes + coarseLists.bytes + dispatchBytes;
     fc.graph.markOutput(lists.ranges);
     fc.graph.markOutput(lists.indices);
+    fc.graph.markOutput(lists.dispatch);
 
     const SdfCullLists* previous = fc.board.find<SdfCullLists>();
     SdfCullLists all = previous ? *previous : SdfCullLists{};

@@ -27,6 +27,19 @@ inline constexpr uint32_t kSdfTileSize = 8;  // pixels per tile side
 // to allocate.
 inline constexpr uint32_t kSdfTileAllObjects = 0xffffffffu;
 inline constexpr uint64_t kSdfTileMaxIndices = uint64_t(1) << 26;  // 256 MiB of indices
+// SdfTileLists::dispatch's classes of tiles, in the order of their dispatch records and index arrays
+// (sdf_tile_cull.comp): a list with a baked field (or "all objects"), a list of shape objects only,
+// an empty list.
+enum class SdfTileClass : uint32_t { Fields = 0, Shapes = 1, Empty = 2 };
+inline constexpr uint32_t kSdfTileClasses = 3;
+// The uints of the dispatch records in front of the tile indices (one record of 4 per class).
+inline constexpr uint32_t kSdfTileDispatchHeader = 4 * kSdfTileClasses;
+// The byte offset of a class's indirect dispatch record (x tiles, 1, 1) in SdfTileLists::dispatch.
+constexpr uint64_t sdfTileDispatchRecord(SdfTileClass c) { return 16 * uint64_t(c); }
+// The index of a class's first tile in SdfTileLists::dispatch (as uints).
+constexpr uint32_t sdfTileDispatchFirst(SdfTileClass c, uint32_t tilesX, uint32_t tilesY) {
+    return kSdfTileDispatchHeader + uint32_t(c) * tilesX * tilesY;
+}
 
 // One set of tile lists. ranges: uvec2 per tile and layer (x first index into `indices`, y count);
 // tile index = (y / 8) * tilesX + x / 8; layer L (one per shadowed light for shadows) starts at
@@ -34,11 +47,17 @@ inline constexpr uint64_t kSdfTileMaxIndices = uint64_t(1) << 26;  // 256 MiB of
 struct SdfTileLists {
     fg::BufferRef ranges;
     fg::BufferRef indices;
+    // The primary lists only (else invalid): the tiles by class (SdfTileClass) for sdf_trace's
+    // indirect dispatches, uint[kSdfTileDispatchHeader + kSdfTileClasses * tilesX * tilesY]: each
+    // class's dispatch arguments (x tiles, 1, 1) at sdfTileDispatchRecord, its tiles' indices from
+    // sdfTileDispatchFirst on (in no particular order).
+    fg::BufferRef dispatch;
     uint32_t tilesX = 0, tilesY = 0;
     uint32_t layers = 1;
     uint64_t bytes = 0;  // ranges + indices
     // The culling's working buffers of the frame behind these lists (per-object records, counters,
-    // the coarse level, dummy ranges), counted on one list of those that share them.
+    // the coarse level, dummy ranges, the tile dispatch), counted on one list of those that share
+    // them.
     uint64_t scratchBytes = 0;
     bool valid() const { return ranges.isValid() && indices.isValid(); }
 };
@@ -70,8 +89,8 @@ uint64_t sdfTileListCapacity(const SdfTileCullDesc& desc, uint32_t width, uint32
 // Adds "sdf_tile_cull_bounds" (compute: per object its world box, bounding sphere and a
 // conservative tile rectangle, 80 bytes each), "sdf_tile_cull_clear" (transfer: zeroes the slot
 // counters), "sdf_tile_cull_coarse" (compute: the same lists for 64x64 pixel tiles from every
-// object) and "sdf_tile_cull" (compute: per 8x8 tile, testing only its coarse tile's list; both
-// levels one invocation per tile) and publishes
+// object) and "sdf_tile_cull" (compute: per 8x8 tile, testing only its coarse tile's list, and the
+// tile dispatch; both levels one invocation per tile) and publishes
 // SdfCullLists::primary (other members kept). Reads SceneBuffers::view and SdfSceneBuffers::objects;
 // desc.objects must describe the uploaded objects. The lists are marked as frame outputs (kept to the end of
 // the frame, never aliased after their last use) so that SceneRenderer::readBuffer can read them back and the

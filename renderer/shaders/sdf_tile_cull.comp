@@ -23,6 +23,12 @@
 //     upper bound of this total, capped at kSdfTileMaxIndices); a reservation past that capacity -
 //     unreachable below the cap - writes (0, 0xffffffff), "all objects", and the consumer loops
 //     over every object.
+//  4. (fine level) the trace's tile dispatch (renderer/features/sdf_cull.h, SdfTileLists::dispatch):
+//     the tile appends its index to its class's tiles and counts itself in that class's indirect
+//     dispatch arguments. Classes: a list with a baked field (or "all objects"), a list of shape
+//     objects only, an empty list. sdf_trace runs the first with the frame's variant, the second
+//     with its variant without field code, and the empty tiles only get the G-buffer's "nothing
+//     hit" values (sdf_trace_empty.comp).
 // Loops per invocation: twice the candidates (every object at the coarse level, the coarse tile's
 // list at the fine level).
 #version 450
@@ -33,7 +39,7 @@ layout(local_size_x = 64) in;
 // Written by sdf_tile_cull_bounds.comp (the same struct; sdf_cull.cpp checks both layouts).
 struct TileCullObject {
     vec4 centre;  // xyz box centre relative to the camera, w bounding radius (< 0: unbounded)
-    vec4 axis0;   // xyz half axes of the box in world units
+    vec4 axis0;   // xyz half axes of the box in world units (axis0.w: 1 for a baked field, else 0)
     vec4 axis1;
     vec4 axis2;
     uvec4 rect;  // tiles x0, y0, x1, y1 (inclusive; x0 > x1: no tile)
@@ -46,12 +52,19 @@ layout(set = 2, binding = 3, std430) buffer SdfTileCounter { uint reserved[]; };
 // The coarse level's lists (the fine level's input; unused by the coarse level itself).
 layout(set = 2, binding = 4, std430) readonly buffer SdfTileCoarseRanges { uvec2 coarseRanges[]; };
 layout(set = 2, binding = 5, std430) readonly buffer SdfTileCoarseIndices { uint coarseIndices[]; };
+// The fine level's tile dispatch (cleared by sdf_tile_cull_clear: every argument record (0, 1, 1)):
+// per class c the dispatch arguments at [4c, 4c + 3), its tiles' indices from kDispatchHeader + c *
+// tilesX * tilesY on. The coarse level leaves it alone.
+layout(set = 2, binding = 6, std430) buffer SdfTileDispatchOut { uint dispatchOut[]; };
+const uint kClassFields = 0u, kClassShapes = 1u, kClassEmpty = 2u;  // SdfTileClass
+const uint kDispatchHeader = 12u;                                   // kSdfTileDispatchHeader
 
 layout(push_constant) uniform SdfTileCull {
     uvec4 counts;  // x objects [0, x) are culled, y capacity of indicesOut, z tilesX, w tilesY (this level)
     vec4 clip;     // x near, y far (linear depth)
-    uvec4 level;   // x tile size in pixels, y 8x8 tiles per tile side, z counter index, w coarse
-                   // tiles per row (0: no input list, test every object)
+    uvec4 level;   // x tile size in pixels, y 8x8 tiles per tile side, z counter index (1: the fine
+                   // level, which also writes the tile dispatch), w coarse tiles per row (0: no input
+                   // list, test every object)
 } cull;
 
 const uint kAllObjects = 0xffffffffu;
@@ -134,11 +147,22 @@ void main() {
     uint base = n > 0u ? atomicAdd(reserved[cull.level.z], n) : 0u;
     bool overflow = base > cull.counts.y || n > cull.counts.y - base;
     rangesOut[tileIndex] = overflow ? uvec2(0u, kAllObjects) : uvec2(base, n);
-    if (overflow || n == 0u) return;
-    // 3. Write the indices in ascending order.
-    uint slot = base;
-    for (uint k = 0u; k < count && slot < base + n; ++k) {
-        uint obj = candidate(k);
-        if (objectInTile(obj, tile)) indicesOut[slot++] = obj;
+    // 3. Write the indices in ascending order (and whether one of them is a baked field).
+    bool fields = overflow;
+    if (!overflow) {
+        uint slot = base;
+        for (uint k = 0u; k < count && slot < base + n; ++k) {
+            uint obj = candidate(k);
+            if (objectInTile(obj, tile)) {
+                indicesOut[slot++] = obj;
+                fields = fields || cullObjects[obj].axis0.w != 0.0;
+            }
+        }
+    }
+    // 4. The tile dispatch (fine level).
+    if (cull.level.z == 1u) {
+        uint c = overflow || n > 0u ? (fields ? kClassFields : kClassShapes) : kClassEmpty;
+        uint at = atomicAdd(dispatchOut[4u * c], 1u);
+        dispatchOut[kDispatchHeader + c * cull.counts.z * cull.counts.w + at] = tileIndex;
     }
 }

@@ -31,7 +31,7 @@ struct SdfObject {
 // Shared with sdf_tile_cull.comp (sdf_cull.cpp checks both against one C++ layout).
 struct TileCullObject {
     vec4 centre;  // xyz box centre relative to the camera, w bounding radius (< 0: unbounded)
-    vec4 axis0;   // xyz half axes of the box in world units
+    vec4 axis0;   // xyz half axes of the box in world units (axis0.w: 1 for a baked field, else 0)
     vec4 axis1;
     vec4 axis2;
     uvec4 rect;  // tiles x0, y0, x1, y1 (inclusive; x0 > x1: no tile)
@@ -46,6 +46,7 @@ layout(push_constant) uniform SdfTileCullBounds {
 } bounds;
 
 const uvec4 kNoTile = uvec4(1u, 1u, 0u, 0u);
+const uint kKindField = 1u;  // SDF_KIND_FIELD of sdf_scene.glsl (info.x)
 
 // The tile rectangle of a sphere at camera-relative centre c wholly in front of the camera.
 uvec4 sphereTiles(vec3 c, float radius, vec3 fwd) {
@@ -94,5 +95,6 @@ void main() {
         rect = all;  // reaches the camera plane
     else
         rect = sphereTiles(c, radius * 1.01, fwd);
-    cullObjects[obj] = TileCullObject(vec4(c, radius), vec4(a0, 0.0), vec4(a1, 0.0), vec4(a2, 0.0), rect);
+    float field = sdfObjects[obj].info.x == kKindField ? 1.0 : 0.0;
+    cullObjects[obj] = TileCullObject(vec4(c, radius), vec4(a0, field), vec4(a1, 0.0), vec4(a2, 0.0), rect);
 }

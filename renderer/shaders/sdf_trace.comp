@@ -55,6 +55,11 @@
 // candidate's distance); otherwise the list (or every object). With ID but not CACHE only the id
 // part is used. While the march's last distance stays below two voxels of the last lookup that
 // gave neither a cache step nor an object, the lookup is skipped (sdf_march.glsl).
+// Tile dispatch (flag TILE_DISPATCH, with the frame's tile lists): one workgroup per tile of a class,
+// from the indirect dispatches the culling wrote: the tiles whose list holds a baked field run the
+// frame's variant, those whose list holds shape objects only the variant without SDF_FIELDS (the
+// same code for what they evaluate, so the same picture), and the tiles with an empty list cross no
+// box, so their pixels are misses with no step (sdf_trace_empty.comp writes those).
 // Cone prepass (flag PREPASS; sdf_cone_prepass.comp ran before): every ray of an 8x8 tile starts no
 // nearer than where the tile's cone touched a surface; the hit decision does not depend on where
 // the march starts, so the picture stays.
@@ -98,6 +103,9 @@ layout(local_size_x = 8, local_size_y = 8) in;
 // Per 8x8 tile: x the ray distance its rays are empty up to (a float's bits), y the evaluations
 // the tile's cone took (sdf_cone_prepass.comp; flag PREPASS; tile index with trace.accel.z per row).
 layout(set = 2, binding = 15, std430) readonly buffer SdfTileStarts { uvec2 sdfTileStarts[]; };
+// The tile dispatch (flag TILE_DISPATCH; renderer/features/sdf_cull.h, SdfTileLists::dispatch): the
+// indices of one class of tiles from trace.accel.w on, one workgroup each.
+layout(set = 2, binding = 16, std430) readonly buffer SdfTileDispatch { uint sdfTileDispatch[]; };
 
 layout(set = 2, binding = 0, r32f) uniform image2D gbufferDepthImage;
 layout(set = 2, binding = 1, rg16f) uniform image2D gbufferNormalImage;
@@ -116,12 +124,15 @@ layout(push_constant) uniform SdfTrace {
     vec4 epsilons;   // x hit epsilon, y normal epsilon (pixel footprints), z over-relaxation omega,
                      // w field safety factor
     vec4 clip;       // x near, y far (linear depth), z pixel footprint per unit of distance
-    uvec4 accel;     // x acceleration flags (k*Flag below), y tiles per row of the tile lists,
-                     // z tiles per row of sdfTileStarts
+    uvec4 accel;     // x acceleration flags (k*Flag below), y tiles per row of the tile lists and of
+                     // the tile dispatch, z tiles per row of sdfTileStarts, w the dispatched class's
+                     // first tile in sdfTileDispatch
 } trace;
 
 const uint kRasterFlag = 1u;
 const uint kPrepassFlag = 64u;  // sdfTileStarts holds this frame's cone prepass
+// The dispatch runs over one class of tiles (sdfTileDispatch); every tile otherwise.
+const uint kTileDispatchFlag = 128u;
 
 #include "sdf_march.glsl"
 
@@ -134,7 +145,16 @@ void main() {
     // 8.6 instead of 9.7 steps for the slowest ray of a group, at 3.8 on average). The tile stays
     // the workgroup, and every 32 consecutive invocations still cover 8x4 pixels.
     uint block = gl_LocalInvocationIndex / 8u, lane = gl_LocalInvocationIndex % 8u;
-    ivec2 pixel = ivec2(gl_WorkGroupID.xy * 8u + uvec2(block % 4u * 2u + lane % 2u, block / 4u * 4u + lane / 2u));
+    // With tile lists the workgroups run over one class of tiles: a CPU device runs all of the
+    // march's code for a group of lanes even when none of them crosses a box (the empty tiles get the
+    // "nothing hit" values from sdf_trace_empty.comp instead) or none needs it (the tiles whose list
+    // has no baked field run the variant without field code).
+    uvec2 tile = gl_WorkGroupID.xy;
+    if ((trace.accel.x & kTileDispatchFlag) != 0u) {
+        uint index = sdfTileDispatch[trace.accel.w + gl_WorkGroupID.x];
+        tile = uvec2(index % trace.accel.y, index / trace.accel.y);
+    }
+    ivec2 pixel = ivec2(tile * 8u + uvec2(block % 4u * 2u + lane % 2u, block / 4u * 4u + lane / 2u));
     if (pixel.x >= int(view.viewport.x) || pixel.y >= int(view.viewport.y)) return;
     // The cone prepass (sdf_cone_prepass.comp): every ray of the tile is empty up to its start.
     bool prepass = (trace.accel.x & kPrepassFlag) != 0u;

@@ -8,13 +8,20 @@
 //      never take the "all objects" fallback;
 //   2. memory: the lists' bytes (FrameStats::tileListBytes) follow the scene - 1 object uses far less
 //      than 80 - and culling off builds nothing;
-//   3. the tiles debug view: a golden per backend.
+//   3. the tiles debug view: a golden per backend;
+//   4. the trace's tile dispatch (SdfTileLists::dispatch): on the generated objects scene (baked
+//      meshes in a room of analytic boxes, sky above) every tile is in exactly one class, the class
+//      its list says (empty; a baked field listed; shape objects only), each class's dispatch
+//      arguments count its tiles, and the empty tiles, which sdf_trace skips, hold the G-buffer's
+//      "nothing hit" values exactly, as the same pixels do with culling off.
 // Every assertion states its metric and threshold; measured numbers are printed.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <limits>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,6 +34,7 @@
 #include "engine/ecs/components.h"
 #include "engine/ecs/world.h"
 #include "engine/engine.h"
+#include "engine/scene/objects_scene.h"
 #include "engine/scene/scene.h"
 #include "engine/sdf/shape_program.h"
 #include "renderer/features/sdf_cull.h"
@@ -34,6 +42,7 @@
 #include "support/golden.h"
 #include "support/ref_camera.h"
 #include "support/test_device.h"
+#include "support/test_files.h"
 
 namespace penumbra::test {
 namespace {
@@ -421,6 +430,146 @@ TEST_P(SdfCull, TilesDebugViewMatchesGolden) {
     EXPECT_GE(colours.size(), 6u) << "at least 6 distinct list lengths shown";
     const std::string failure = checkGolden(backend(), "sdf_cull_tiles", image);
     EXPECT_TRUE(failure.empty()) << failure;
+}
+
+// ---- 4. the trace's tile dispatch ------------------------------------------------------------------
+
+// The G-buffer of the frame just rendered: depth, material and aux texels.
+struct GBufferTexels {
+    std::vector<float> depth, aux;  // aux: x id, y steps (two floats per pixel)
+    std::vector<uint8_t> material;  // RGBA8
+};
+
+bool readGBuffer(SceneRenderer& r, GBufferTexels& g, std::string& error) {
+    std::vector<uint8_t> texels;
+    rhi::Format format{};
+    if (!r.readTarget("gbuffer.depth", texels, format, error)) return false;
+    g.depth.resize(texels.size() / 4);
+    std::memcpy(g.depth.data(), texels.data(), texels.size());
+    if (!r.readTarget("gbuffer.material", g.material, format, error)) return false;
+    if (!r.readTarget("gbuffer.aux", texels, format, error)) return false;
+    g.aux.resize(texels.size() / 4);
+    std::memcpy(g.aux.data(), texels.data(), texels.size());
+    return true;
+}
+
+TEST_P(SdfCull, TileDispatchSortsEveryTileByItsList) {
+    if (!std::filesystem::exists(PENUMBRA_SOURCE_DIR "/data/meshes/bunny.ply"))
+        GTEST_SKIP() << "data/meshes is missing: run tools/fetch_meshes.sh";
+    scene::ObjectsSceneDesc sd;
+    sd.count = 20;
+    sd.meshDir = PENUMBRA_SOURCE_DIR "/data/meshes";
+    sd.aspect = float(kW) / float(kH);
+    scene::ObjectsScene generated;
+    std::string error;
+    ASSERT_TRUE(scene::generateObjectsScene(sd, generated, error)) << error;
+    const std::string path = PENUMBRA_BINARY_DIR "/test_cache/cull_objects20.json";
+    ASSERT_TRUE(writeTestFile(path, generated.json));
+    EngineDesc desc;
+    desc.loadStaticPlugins = false;
+    desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";
+    std::unique_ptr<Engine> engine = Engine::create(desc, error);
+    ASSERT_TRUE(engine && engine->loadScene(path, error)) << error;
+    engine->update(0.0);
+    FrameDesc frame;
+    frame.width = kW;
+    frame.height = kH;
+    frame.settings = engine->settings();
+    frame.settings.acceleration.culling = true;
+    frame.camera = scene::findCamera(engine->world(), engine->settings().camera);
+    frame.aux = true;
+
+    SceneRenderer r(dev());
+    ASSERT_TRUE(r.render(engine->world(), engine->assets(), frame, error)) << error;
+    const Lists l = readLists(r);
+    std::vector<uint8_t> bytes;
+    ASSERT_TRUE(r.readBuffer("sdf.objects", bytes, error)) << error;
+    std::vector<render::GpuSdfObject> objects(bytes.size() / sizeof(render::GpuSdfObject));
+    std::memcpy(objects.data(), bytes.data(), objects.size() * sizeof(render::GpuSdfObject));
+    ASSERT_TRUE(r.readBuffer("sdf.tile_dispatch", bytes, error)) << error;
+    const size_t tiles = size_t(l.tilesX) * l.tilesY;
+    ASSERT_EQ(bytes.size(), (render::kSdfTileDispatchHeader + render::kSdfTileClasses * tiles) * 4);
+    std::vector<uint32_t> dispatch(bytes.size() / 4);
+    std::memcpy(dispatch.data(), bytes.data(), bytes.size());
+    GBufferTexels culled;
+    ASSERT_TRUE(readGBuffer(r, culled, error)) << error;
+
+    // The class each tile's list calls for.
+    auto expectedClass = [&](size_t tile) {
+        const glm::uvec2 range = l.ranges[tile];
+        if (range.y == render::kSdfTileAllObjects) return render::SdfTileClass::Fields;
+        if (range.y == 0) return render::SdfTileClass::Empty;
+        for (uint32_t k = 0; k < range.y; ++k)
+            if (objects.at(l.indices.at(range.x + k)).info.x == uint32_t(render::SdfKind::Field))
+                return render::SdfTileClass::Fields;
+        return render::SdfTileClass::Shapes;
+    };
+    std::vector<int> seen(tiles, 0);
+    uint64_t wrongClass = 0, outOfRange = 0;
+    uint32_t counts[render::kSdfTileClasses] = {};
+    for (uint32_t c = 0; c < render::kSdfTileClasses; ++c) {
+        const render::SdfTileClass cls = render::SdfTileClass(c);
+        const uint32_t* record = &dispatch[render::sdfTileDispatchRecord(cls) / 4];
+        counts[c] = record[0];
+        EXPECT_EQ(record[1], 1u) << "class " << c << ": dispatch arguments (tiles, 1, 1)";
+        EXPECT_EQ(record[2], 1u) << "class " << c << ": dispatch arguments (tiles, 1, 1)";
+        ASSERT_LE(counts[c], tiles) << "class " << c;
+        const uint32_t first = render::sdfTileDispatchFirst(cls, l.tilesX, l.tilesY);
+        for (uint32_t k = 0; k < counts[c]; ++k) {
+            const uint32_t tile = dispatch[first + k];
+            if (tile >= tiles) {
+                ++outOfRange;
+                continue;
+            }
+            ++seen[tile];
+            wrongClass += expectedClass(tile) != cls;
+        }
+    }
+    const uint64_t missing = uint64_t(std::count(seen.begin(), seen.end(), 0));
+    const uint64_t repeated = uint64_t(std::count_if(seen.begin(), seen.end(), [](int n) { return n > 1; }));
+    std::printf("  [%s] %zu tiles: %u with a field, %u shapes only, %u empty\n", backend().c_str(), tiles,
+                counts[0], counts[1], counts[2]);
+    EXPECT_EQ(uint64_t(counts[0]) + counts[1] + counts[2], tiles)
+        << "the classes' counts add up to the tiles";
+    EXPECT_EQ(outOfRange, 0u) << "tile indices < tilesX * tilesY";
+    EXPECT_EQ(missing, 0u) << "every tile in a class: 0 missing allowed";
+    EXPECT_EQ(repeated, 0u) << "no tile in two places: 0 allowed";
+    EXPECT_EQ(wrongClass, 0u) << "each tile in the class its list calls for: 0 mismatches allowed";
+    // The scene has all three: objects (fields), floor and walls alone (shapes), sky (empty).
+    EXPECT_GT(counts[0], 0u) << "tiles with a baked field";
+    EXPECT_GT(counts[1], 0u) << "tiles of shape objects only";
+    EXPECT_GT(counts[2], 0u) << "empty tiles";
+
+    // The empty tiles' pixels (which sdf_trace did not run on) hold "nothing hit" exactly, as they
+    // do with culling off (every tile traced).
+    frame.settings.acceleration.culling = false;
+    SceneRenderer unculled(dev());
+    ASSERT_TRUE(unculled.render(engine->world(), engine->assets(), frame, error)) << error;
+    GBufferTexels all;
+    ASSERT_TRUE(readGBuffer(unculled, all, error)) << error;
+    ASSERT_EQ(culled.depth.size(), size_t(kW) * kH);
+    ASSERT_EQ(all.depth.size(), culled.depth.size());
+    uint64_t emptyPixels = 0, notMiss = 0, differ = 0;
+    for (uint32_t y = 0; y < kH; ++y)
+        for (uint32_t x = 0; x < kW; ++x) {
+            if (expectedClass((y / 8) * l.tilesX + x / 8) != render::SdfTileClass::Empty) continue;
+            const size_t p = size_t(y) * kW + x;
+            ++emptyPixels;
+            const bool miss = culled.depth[p] == 0.0f && culled.aux[2 * p] == -1.0f &&
+                              culled.aux[2 * p + 1] == 0.0f &&
+                              std::all_of(&culled.material[4 * p], &culled.material[4 * p + 4],
+                                          [](uint8_t v) { return v == 0; });
+            notMiss += !miss;
+            differ += culled.depth[p] != all.depth[p] || culled.aux[2 * p] != all.aux[2 * p] ||
+                      culled.aux[2 * p + 1] != all.aux[2 * p + 1] ||
+                      !std::equal(&culled.material[4 * p], &culled.material[4 * p + 4], &all.material[4 * p]);
+        }
+    std::printf("  [%s] %llu pixels in empty tiles: %llu not \"nothing hit\", %llu unlike culling off\n",
+                backend().c_str(), (unsigned long long)emptyPixels, (unsigned long long)notMiss,
+                (unsigned long long)differ);
+    EXPECT_GT(emptyPixels, 0u);
+    EXPECT_EQ(notMiss, 0u) << "depth 0, material 0, aux (-1, 0): 0 other pixels allowed";
+    EXPECT_EQ(differ, 0u) << "the same texels as with culling off: 0 pixels differing allowed";
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, SdfCull, testing::ValuesIn(gpuBackends()), backendName);
