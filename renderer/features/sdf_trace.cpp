@@ -133,14 +133,14 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
     const bool tiles = desc.accel.culling && cullLists && cullLists->primary.valid();
     const SdfTileLists tileLists = tiles ? cullLists->primary : SdfTileLists{};
     // The tile dispatch (with tile lists): the tiles whose list holds a baked field run the frame's
-    // variant, those of shape objects only the variant without field code, and (without a mesh
-    // pass) sdf_trace_empty writes the empty tiles' "nothing hit" values; with a mesh pass they keep
-    // its values.
+    // variant, those of shape objects only the variant without field code and without the world
+    // cache (sdf_trace.comp says why), and (without a mesh pass) sdf_trace_empty writes the empty
+    // tiles' "nothing hit" values; with a mesh pass they keep its values.
     const bool tileDispatch = tiles && tileLists.dispatch.isValid();
     const rhi::ShaderDesc& shapesCs =
-        tileDispatch && fields ? program::compute(traceProgramVariant(albedo, aux, false, cacheBound,
-                                                                      sdfScene.shapePrimitives, objectsUbo))
-                               : cs;
+        tileDispatch ? program::compute(traceProgramVariant(albedo, aux, false, false,
+                                                            sdfScene.shapePrimitives, objectsUbo))
+                     : cs;
     const rhi::PipelineHandle shapesPipeline =
         &shapesCs == &cs ? pipeline : fc.cache.computePipeline(shapesCs);
     const rhi::ShaderDesc& emptyCs =
@@ -197,9 +197,9 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 if (albedo) params.setStorage("gbufferAlbedoImage", ctx.texture(d.gb.albedo));
                 if (aux) params.setStorage("gbufferAuxImage", ctx.texture(d.gb.aux));
             };
-            // One sdf_trace program (the frame's variant, or the one without field code).
-            auto bindTrace = [&](const rhi::ShaderDesc& program, rhi::PipelineHandle handle,
-                                 bool withFields) {
+            // One sdf_trace program (the frame's variant, or the one without field code and cache).
+            auto bindTrace = [&](const rhi::ShaderDesc& program, rhi::PipelineHandle handle, bool withFields,
+                                 bool withCache) {
                 ctx.cmd.bindPipeline(handle);
                 ShaderParams params(program);
                 setGBuffer(params);
@@ -209,14 +209,14 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
                 setSdfScene(params, ctx, sdf, sampler, objectsUboBytes);
                 // Without tile lists the object buffer stands in (read-only, already declared here).
                 setSdfTileLists(params, ctx, d.tiles, d.sdf.objects);
-                if (cacheBound) setSdfWorldCache(params, ctx, d.cache);
+                if (withCache) setSdfWorldCache(params, ctx, d.cache);
                 params.set("SdfTileStarts",
                            ctx.buffer(d.tileStarts.isValid() ? d.tileStarts : d.sdf.objects));
                 params.set("SdfTileDispatch", ctx.buffer(d.dispatch.isValid() ? d.dispatch : d.sdf.objects));
                 return params.bind(ctx.cmd, cache, handle);
             };
             if (!d.dispatch.isValid()) {
-                if (!bindTrace(cs, pipeline, d.sdf.atlas.isValid())) return;
+                if (!bindTrace(cs, pipeline, d.sdf.atlas.isValid(), cacheBound)) return;
                 ctx.cmd.pushConstants(&push, sizeof(push));
                 dispatchOver(ctx.cmd, cs, width, height);
                 return;
@@ -225,7 +225,7 @@ bool addSdfTrace(FrameContext& fc, const SdfTraceDesc& desc) {
             for (SdfTileClass c : {SdfTileClass::Fields, SdfTileClass::Shapes}) {
                 const bool shapes = c == SdfTileClass::Shapes;
                 if (!bindTrace(shapes ? shapesCs : cs, shapes ? shapesPipeline : pipeline,
-                               d.sdf.atlas.isValid() && !shapes))
+                               d.sdf.atlas.isValid() && !shapes, cacheBound && !shapes))
                     return;
                 program::PushConstants classPush = push;
                 classPush.accel.w = sdfTileDispatchFirst(c, tilesX, tilesY);
