@@ -3,6 +3,7 @@
 #include "renderer/features/sdf_cull.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstddef>
 
@@ -232,12 +233,12 @@ const SdfTileLists& addSdfTileCull(FrameContext& fc, const SdfTileCullDesc& desc
             ctx.cmd.fillBuffer(ctx.buffer(d.counter), 0, kCounterBytes, 0u);
             // Every class's dispatch record (0 tiles, 1, 1); the tile indices are written before
             // they are read.
-            const rhi::BufferHandle dispatch = ctx.buffer(d.dispatch);
+            std::array<uint32_t, kSdfTileDispatchHeader> records{};
             for (uint32_t c = 0; c < kSdfTileClasses; ++c) {
-                const uint64_t record = sdfTileDispatchRecord(SdfTileClass(c));
-                ctx.cmd.fillBuffer(dispatch, record, 4, 0u);
-                ctx.cmd.fillBuffer(dispatch, record + 4, 8, 1u);
+                const uint64_t record = sdfTileDispatchRecord(SdfTileClass(c)) / 4;
+                records[record + 1] = records[record + 2] = 1;
             }
+            ctx.cmd.updateBuffer(ctx.buffer(d.dispatch), 0, records.data(), sizeof(records));
         });
 
     // Coarse tiles from every object (counter 0), then the 8x8 tiles from their coarse tile's list
