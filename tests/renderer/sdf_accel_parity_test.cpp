@@ -23,10 +23,10 @@
 
 #include "engine/engine.h"
 #include "engine/scene/mesh_sdf.h"
-#include "engine/scene/objects_scene.h"
 #include "renderer/scene_renderer.h"
 #include "support/accel_toggles.h"
 #include "support/golden.h"
+#include "support/objects_scene_file.h"
 #include "support/test_device.h"
 #include "support/test_files.h"
 
@@ -278,15 +278,10 @@ TEST_P(AccelParity, Objects40) { check("objects40", objectsScenePath()); }
 TEST_P(AccelParity, ObjectsRoom) {
     if (!std::filesystem::exists(PENUMBRA_SOURCE_DIR "/data/meshes/bunny.ply"))
         GTEST_SKIP() << "data/meshes is missing: run tools/fetch_meshes.sh";
-    scene::ObjectsSceneDesc d;
-    d.count = 20;
-    d.meshDir = PENUMBRA_SOURCE_DIR "/data/meshes";
-    d.aspect = float(kWidth) / float(kHeight);
-    scene::ObjectsScene generated;
     std::string error;
-    ASSERT_TRUE(scene::generateObjectsScene(d, generated, error)) << error;
-    const std::string path = PENUMBRA_BINARY_DIR "/test_cache/accel_objects_room20.json";
-    ASSERT_TRUE(writeTestFile(path, generated.json));
+    const std::string path =
+        writeObjectsScene("accel_objects_room20.json", 20, float(kWidth) / float(kHeight), error);
+    ASSERT_FALSE(path.empty()) << error;
     check("objects_room", path, false, false);
 }
 

@@ -26,10 +26,10 @@
 
 #include "engine/engine.h"
 #include "engine/scene/mesh_sdf.h"
-#include "engine/scene/objects_scene.h"
 #include "renderer/features/sdf_box_trace.h"
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
+#include "support/objects_scene_file.h"
 #include "support/ref_camera.h"
 #include "support/test_device.h"
 #include "support/test_files.h"
@@ -124,15 +124,8 @@ std::string meshScenePath(bool cut) {
 }
 
 std::string objects200Path() {
-    scene::ObjectsSceneDesc d;
-    d.count = 200;
-    d.instanced = true;
-    d.meshDir = PENUMBRA_SOURCE_DIR "/data/meshes";
-    d.aspect = float(kWidth) / float(kHeight);
-    scene::ObjectsScene s;
     std::string error;
-    if (!scene::generateObjectsScene(d, s, error)) return {};
-    return writeScene("box_trace_objects200.json", s.json);
+    return writeObjectsScene("box_trace_objects200.json", 200, float(kWidth) / float(kHeight), error);
 }
 
 struct Frame {

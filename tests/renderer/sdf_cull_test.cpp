@@ -34,12 +34,12 @@
 #include "engine/ecs/components.h"
 #include "engine/ecs/world.h"
 #include "engine/engine.h"
-#include "engine/scene/objects_scene.h"
 #include "engine/scene/scene.h"
 #include "engine/sdf/shape_program.h"
 #include "renderer/features/sdf_cull.h"
 #include "renderer/scene_renderer.h"
 #include "support/golden.h"
+#include "support/objects_scene_file.h"
 #include "support/ref_camera.h"
 #include "support/test_device.h"
 #include "support/test_files.h"
@@ -208,6 +208,30 @@ Lists readLists(SceneRenderer& r) {
     return l;
 }
 
+// An engine with the scene file at `path` loaded and updated once (fields baked into the shared
+// test cache); null with `error` when it could not.
+std::unique_ptr<Engine> loadSceneEngine(const std::string& path, std::string& error) {
+    EngineDesc desc;
+    desc.loadStaticPlugins = false;
+    desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";
+    std::unique_ptr<Engine> engine = Engine::create(desc, error);
+    if (!engine || !engine->loadScene(path, error)) return nullptr;
+    engine->update(0.0);
+    return engine;
+}
+
+// A kW x kH frame of the engine's scene with culling on and the aux target.
+FrameDesc culledFrame(Engine& engine) {
+    FrameDesc frame;
+    frame.width = kW;
+    frame.height = kH;
+    frame.settings = engine.settings();
+    frame.settings.acceleration.culling = true;
+    frame.camera = scene::findCamera(engine.world(), engine.settings().camera);
+    frame.aux = true;
+    return frame;
+}
+
 class SdfCull : public GpuTest {
 protected:
     std::string backend() const { return GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl"; }
@@ -255,19 +279,10 @@ TEST_P(SdfCull, DenseClusterListsStayConservative) {
 
 // The scene file scenes/shapes.json (CSG, a repeat, a plane; its own camera).
 TEST_P(SdfCull, ShapesSceneListsAreConservative) {
-    EngineDesc desc;
-    desc.loadStaticPlugins = false;
     std::string error;
-    std::unique_ptr<Engine> engine = Engine::create(desc, error);
-    ASSERT_TRUE(engine && engine->loadScene(PENUMBRA_SOURCE_DIR "/scenes/shapes.json", error)) << error;
-    engine->update(0.0);
-    FrameDesc frame;
-    frame.width = kW;
-    frame.height = kH;
-    frame.settings = engine->settings();
-    frame.settings.acceleration.culling = true;
-    frame.camera = scene::findCamera(engine->world(), engine->settings().camera);
-    frame.aux = true;
+    std::unique_ptr<Engine> engine = loadSceneEngine(PENUMBRA_SOURCE_DIR "/scenes/shapes.json", error);
+    ASSERT_TRUE(engine) << error;
+    const FrameDesc frame = culledFrame(*engine);
     size_t count = 0;
     for (auto [e, sr] : engine->world().view<ecs::SdfRenderer>()) count += sr.visible && !sr.occluderOnly;
     checkLists(engine->world(), engine->assets(), frame, count, 0.5);
@@ -456,28 +471,12 @@ bool readGBuffer(SceneRenderer& r, GBufferTexels& g, std::string& error) {
 TEST_P(SdfCull, TileDispatchSortsEveryTileByItsList) {
     if (!std::filesystem::exists(PENUMBRA_SOURCE_DIR "/data/meshes/bunny.ply"))
         GTEST_SKIP() << "data/meshes is missing: run tools/fetch_meshes.sh";
-    scene::ObjectsSceneDesc sd;
-    sd.count = 20;
-    sd.meshDir = PENUMBRA_SOURCE_DIR "/data/meshes";
-    sd.aspect = float(kW) / float(kH);
-    scene::ObjectsScene generated;
     std::string error;
-    ASSERT_TRUE(scene::generateObjectsScene(sd, generated, error)) << error;
-    const std::string path = PENUMBRA_BINARY_DIR "/test_cache/cull_objects20.json";
-    ASSERT_TRUE(writeTestFile(path, generated.json));
-    EngineDesc desc;
-    desc.loadStaticPlugins = false;
-    desc.cacheDir = PENUMBRA_BINARY_DIR "/test_cache";
-    std::unique_ptr<Engine> engine = Engine::create(desc, error);
-    ASSERT_TRUE(engine && engine->loadScene(path, error)) << error;
-    engine->update(0.0);
-    FrameDesc frame;
-    frame.width = kW;
-    frame.height = kH;
-    frame.settings = engine->settings();
-    frame.settings.acceleration.culling = true;
-    frame.camera = scene::findCamera(engine->world(), engine->settings().camera);
-    frame.aux = true;
+    const std::string path = writeObjectsScene("cull_objects20.json", 20, float(kW) / float(kH), error);
+    ASSERT_FALSE(path.empty()) << error;
+    std::unique_ptr<Engine> engine = loadSceneEngine(path, error);
+    ASSERT_TRUE(engine) << error;
+    FrameDesc frame = culledFrame(*engine);
 
     SceneRenderer r(dev());
     ASSERT_TRUE(r.render(engine->world(), engine->assets(), frame, error)) << error;
