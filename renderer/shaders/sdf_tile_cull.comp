@@ -27,8 +27,8 @@
 //     the tile appends its index to its class's tiles and counts itself in that class's indirect
 //     dispatch arguments. Classes: a list with a baked field (or "all objects"), a list of shape
 //     objects only, an empty list. sdf_trace runs the first with the frame's variant, the second
-//     with its variant without field code, and the empty tiles only get the G-buffer's "nothing
-//     hit" values (sdf_trace_empty.comp).
+//     with its variant without field code and world cache, and the empty tiles only get the
+//     G-buffer's "nothing hit" values (sdf_trace_empty.comp).
 // Loops per invocation: twice the candidates (every object at the coarse level, the coarse tile's
 // list at the fine level).
 #version 450

@@ -156,7 +156,7 @@ void main() {
     // With tile lists the workgroups run over one class of tiles: a CPU device runs all of the
     // march's code for a group of lanes even when none of them crosses a box (the empty tiles get the
     // "nothing hit" values from sdf_trace_empty.comp instead) or none needs it (the tiles whose list
-    // has no baked field run the variant without field code).
+    // has no baked field run the variant without field code and world cache).
     uvec2 tile = gl_WorkGroupID.xy;
     if ((trace.accel.x & kTileDispatchFlag) != 0u) {
         uint index = sdfTileDispatch[trace.accel.w + gl_WorkGroupID.x];

@@ -267,7 +267,7 @@ TEST_P(AccelParity, Objects40) { check("objects40", objectsScenePath()); }
 // The generated `bench objects` scene with 20 objects (engine/scene/objects_scene.h): baked meshes
 // in a room of four analytic boxes, with sky above the walls. With culling the trace runs each
 // class of tiles on its own (sdf_cull.h, SdfTileLists::dispatch): the tiles that list a baked field
-// with the frame's program, those of the room's boxes alone with the program without field code,
+// with the frame's program, those of the room's boxes alone with the program without field code and cache,
 // and none on the tiles whose list is empty (the "nothing hit" values instead), so every class is
 // compared here. Shadows and AO are off: with them, the culled sun shadow differs along the left
 // wall's top edge (160 px, up to 16/255: the shadow culling moves a soft shadow's march samples,
