@@ -28,6 +28,13 @@ static_assert(offsetof(GpuSdfObject, boundsMax) == offsetof(bounds::SdfObject, b
 static_assert(sizeof(bounds::TileCullObject) == sizeof(program::TileCullObject));
 static_assert(offsetof(bounds::TileCullObject, rect) == offsetof(program::TileCullObject, rect));
 static_assert(offsetof(bounds::TileCullObject, axis2) == offsetof(program::TileCullObject, axis2));
+// The literals the shaders hold for these (GLSL constants do not reach the generated headers):
+// sdf_tile_cull_bounds.comp kKindField, sdf_tile_cull.comp kClass* and kDispatchHeader.
+static_assert(uint32_t(SdfKind::Field) == 1);
+static_assert(uint32_t(SdfTileClass::Fields) == 0 && uint32_t(SdfTileClass::Shapes) == 1 &&
+              uint32_t(SdfTileClass::Empty) == 2 && kSdfTileDispatchHeader == 12);
+static_assert(sdfTileDispatchRecord(SdfTileClass::Empty) ==
+              4 * sizeof(uint32_t) * uint32_t(SdfTileClass::Empty));
 
 bool unbounded(const GpuSdfObject& o) {
     for (int a = 0; a < 3; ++a)

@@ -56,8 +56,9 @@ layout(set = 2, binding = 5, std430) readonly buffer SdfTileCoarseIndices { uint
 // per class c the dispatch arguments at [4c, 4c + 3), its tiles' indices from kDispatchHeader + c *
 // tilesX * tilesY on. The coarse level leaves it alone.
 layout(set = 2, binding = 6, std430) buffer SdfTileDispatchOut { uint dispatchOut[]; };
-const uint kClassFields = 0u, kClassShapes = 1u, kClassEmpty = 2u;  // SdfTileClass
-const uint kDispatchHeader = 12u;                                   // kSdfTileDispatchHeader
+// SdfTileClass and kSdfTileDispatchHeader (sdf_cull.cpp checks these values).
+const uint kClassFields = 0u, kClassShapes = 1u, kClassEmpty = 2u;
+const uint kDispatchHeader = 12u;
 
 layout(push_constant) uniform SdfTileCull {
     uvec4 counts;  // x objects [0, x) are culled, y capacity of indicesOut, z tilesX, w tilesY (this level)

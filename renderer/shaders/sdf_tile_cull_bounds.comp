@@ -46,7 +46,7 @@ layout(push_constant) uniform SdfTileCullBounds {
 } bounds;
 
 const uvec4 kNoTile = uvec4(1u, 1u, 0u, 0u);
-const uint kKindField = 1u;  // SDF_KIND_FIELD of sdf_scene.glsl (info.x)
+const uint kKindField = 1u;  // SDF_KIND_FIELD of sdf_scene.glsl (info.x; sdf_cull.cpp checks it)
 
 // The tile rectangle of a sphere at camera-relative centre c wholly in front of the camera.
 uvec4 sphereTiles(vec3 c, float radius, vec3 fwd) {
