@@ -87,7 +87,7 @@ void main() {
     g_evaluations += 4u;  // the normal's tetrahedron
     float footprint = trace.clip.z;
     float h = max(max(trace.epsilons.y * footprint * t, 1e-5 * max(length(p), 1.0)), 0.5 * sdfObjectVoxel(hitObject));
-    vec3 n = objectNormal(hitObject, p, h);
+    vec3 n = sdfObjectNormal(hitObject, p, h);
     if (any(isnan(n))) n = -rd;
     uvec4 info = sdfObjects[hitObject].info;
     outDepth = t / dirLength;

@@ -1,7 +1,7 @@
 // The sphere-tracing march of sdf_trace.comp (its header describes the algorithm step by step),
 // shared with the box trace's fragment shader (sdf_box_trace.frag) so both decide hits with the same
-// code: the candidate lists, sceneDistance, the hit decision's root search RootSearch, objectNormal
-// and the march loop sdfMarch.
+// code: the candidate lists, sceneDistance, the hit decision's root search RootSearch
+// and the march loop sdfMarch (the hit's normal: sdfObjectNormal, sdf_scene.glsl).
 //
 // Use: declare a push constant block named `trace` whose first members are sdf_trace.comp's
 // (uvec4 counts, vec4 epsilons, vec4 clip, uvec4 accel), include sdf_scene.glsl and, unless
@@ -549,17 +549,6 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     s.ta = tOut;
 }
 #endif
-
-// The gradient of the object's world distance over a tetrahedron of offsets h (4 evaluations).
-vec3 objectNormal(uint obj, vec3 p, float h) {
-    vec3 g = vec3(0.0);
-    for (int i = 0; i < 4; ++i) {
-        vec3 k = vec3((i == 0 || i == 3) ? 1.0 : -1.0, (i == 2 || i == 3) ? 1.0 : -1.0,
-                      (i == 1 || i == 3) ? 1.0 : -1.0);
-        g += k * sdfObjectDistance(obj, p + k * h, 0.0);
-    }
-    return normalize(g);
-}
 
 // The step-limit rule's candidate (sdfMarch): the point with the smallest screen-space error
 // d / t so far, and its object.

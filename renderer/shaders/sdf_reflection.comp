@@ -141,17 +141,6 @@ uint traceRay(vec3 o, vec3 d, float start, out float t) {
     return 0xffffffffu;
 }
 
-// The gradient of the object's world distance over a tetrahedron of offsets h.
-vec3 objectNormal(uint obj, vec3 p, float h) {
-    vec3 g = vec3(0.0);
-    for (int i = 0; i < 4; ++i) {
-        vec3 k = vec3((i == 0 || i == 3) ? 1.0 : -1.0, (i == 2 || i == 3) ? 1.0 : -1.0,
-                      (i == 1 || i == 3) ? 1.0 : -1.0);
-        g += k * sdfObjectDistance(obj, p + k * h, 0.0);
-    }
-    return normalize(g);
-}
-
 // Visibility of a light from the reflected hit p (normal n, direction to the light l), as the
 // shadow pass computes it for a pixel (sdf_shadow.comp): only lights the frame shadows (shadow.x >=
 // 0), the cone half-angle from the light's size (hard rays with the hard setting), the ray lifted
@@ -220,7 +209,7 @@ vec4 reflectPixel(ivec2 pixel, float depth, Material m) {
         vec3 q = o + r * t;
         float h = max(max(pc.epsilons.y * pc.epsilons.w * (camDist + t), 1e-5 * max(length(q), 1.0)),
                       0.5 * sdfObjectVoxel(hit));
-        vec3 nq = objectNormal(hit, q, h);
+        vec3 nq = sdfObjectNormal(hit, q, h);
         if (any(isnan(nq))) nq = -r;
         radiance = shadeHit(materials[sdfObjects[hit].info.z], q, nq, -r, pc.epsilons.w * (camDist + t));
     }

@@ -88,6 +88,34 @@ float sdfObjectDistance(uint object, vec3 pw, float fieldSafety) {
     return sdfObjects[object].boundsMin.w * sdfLocalDistance(object, sdfToLocal(object, pw), fieldSafety);
 }
 
+// The unit gradient of the object's world distance at p by central differences over a tetrahedron
+// of offsets h (4 evaluations, fields without their safety bound): the hit's normal of the trace,
+// the box trace and the reflections. The object's record, transform and field slot are loaded once
+// for the four points (each is sdfObjectDistance(obj, p + k h, 0)).
+vec3 sdfObjectNormal(uint obj, vec3 p, float h) {
+    uvec4 info = sdfObjects[obj].info;
+    mat4 w = sdfObjects[obj].worldToLocal;
+    float scale = sdfObjects[obj].boundsMin.w;
+#ifdef SDF_FIELDS
+    SdfField f = sdfFields[info.x == SDF_KIND_FIELD ? info.y : 0u];
+#endif
+    vec3 g = vec3(0.0);
+    for (int i = 0; i < 4; ++i) {
+        vec3 k = vec3((i == 0 || i == 3) ? 1.0 : -1.0, (i == 2 || i == 3) ? 1.0 : -1.0,
+                      (i == 1 || i == 3) ? 1.0 : -1.0);
+        vec3 pl = (w * vec4(p + k * h, 1.0)).xyz;
+        float d;
+#ifdef SDF_FIELDS
+        if (info.x == SDF_KIND_SHAPES) d = sdfShapeDistance(info, pl);
+        else d = sdfFieldDistanceOf(f, pl);
+#else
+        d = info.x == SDF_KIND_SHAPES ? sdfShapeDistance(info, pl) : SHAPE_FAR;
+#endif
+        g += k * (scale * d);
+    }
+    return normalize(g);
+}
+
 // The object's voxel size in world units (0 for analytic shapes).
 float sdfObjectVoxel(uint object) {
 #ifdef SDF_FIELDS

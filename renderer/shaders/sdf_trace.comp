@@ -1,7 +1,7 @@
 // sdf_trace: full-screen sphere tracing of the frame's SDF objects into the G-buffer
 // (renderer/features/sdf_trace.h documents the settings, renderer/scene_renderer.h the G-buffer).
-// The march and hit decision (steps 2-6's code: candidate lists, sceneDistance, RootSearch,
-// objectNormal, sdfMarch) live in sdf_march.glsl, shared with the box trace (sdf_box_trace.frag).
+// The march and hit decision (steps 2-5's code: candidate lists, sceneDistance, RootSearch,
+// sdfMarch) live in sdf_march.glsl, shared with the box trace (sdf_box_trace.frag).
 // One invocation per pixel:
 //  1. the camera ray through the pixel centre; its interval ends at the rasterized depth when a mesh
 //     pass ran (RASTER flag: the trace is bounded by the raster depth, so meshes and SDFs occlude
@@ -249,7 +249,7 @@ void main() {
         // Fields: at least half a voxel, so the gradient spans the trilinear cells around the
         // point instead of one cell's piecewise-linear facet.
         float h = max(max(trace.epsilons.y * footprint * t, 1e-5 * max(length(p), 1.0)), 0.5 * sdfObjectVoxel(hitObject));
-        vec3 n = objectNormal(hitObject, p, h);
+        vec3 n = sdfObjectNormal(hitObject, p, h);
         if (any(isnan(n))) n = -rd;
         uvec4 info = sdfObjects[hitObject].info;
         depth = vec4(t / dirLength);
