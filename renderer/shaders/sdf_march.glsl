@@ -191,9 +191,10 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 //
 // A baked field's search walks its cells instead (cellStep): from t0 (or where the ray enters the
 // field's box of voxel centres B) through each trilinear cell the ray crosses, the first root of the
-// interpolant of the cell's eight stored values along the ray (a cubic: cellFirstRoot), exactly,
-// without the filter and without steps that could pass a thin part; a cell whose values are all
-// above zero has none. The walk is bounded by the march's step limit only (each cell one step),
+// interpolant of the cell's eight stored values along the ray (a cubic: cellRootPiece and
+// cellPieceRoot), exactly, without the filter and without steps that could pass a thin part; a cell
+// whose values are all above zero has none. Each cell shares the face the walk enters it by with
+// the cell before, so a step reads only the four values of its far face (cellFaceValues). The walk is bounded by the march's step limit only (each cell one step),
 // and it ends at a root, at tEnd or where the ray leaves B, or (the candidate's own object, whose
 // near miss lets the march go on) after a cell whose values are all at least eps: its far side is
 // tPast. So the first root of a field, and the hit, do not depend on where the search starts: the
@@ -228,9 +229,31 @@ struct RootSearch {
     ivec3 cell;
     ivec3 cellBase, cellLast;  // the slot's first atlas texel, and its last cell (dims - 2)
     vec3 xo, xd;  // the ray in the field slot's voxel coordinates (cellRay)
+    // The values of the face that the walk enters the current cell by (its corners in the order
+    // of the two other axes, cellFaceValues), its axis, and the side bit of the cell's far face
+    // on that axis (the face cellStep reads).
+    vec4 face;
+    int faceAxis, faceSide;
+    // The walk ended in the cell of its root, between ta and tb: the cubic and its piece there
+    // (cellRootPiece), solved after the walk's loop (cellPieceRoot).
+    bool rootCell;
+    vec4 cubic, piece;
 };
 
 #ifdef SDF_FIELDS
+// The stored values of the face of a cell (its first atlas texel `base`) on axis a, side bit `side`
+// (0: the face at the cell's lower coordinate): its corner j at the other two axes' bits (j & 1,
+// j >> 1), in axis order.
+vec4 cellFaceValues(ivec3 base, int a, int side) {
+    vec4 v;
+    for (int j = 0; j < 4; ++j) {
+        int u = j & 1, w = j >> 1;
+        ivec3 o = a == 0 ? ivec3(side, u, w) : (a == 1 ? ivec3(u, side, w) : ivec3(u, w, side));
+        v[j] = texelFetch(sdfAtlas, base + o, 0).r;
+    }
+    return v;
+}
+
 // The ray ro + rd t in the voxel coordinates of a field object's slot f: x = xo + xd t.
 void cellRay(uint obj, SdfField f, vec3 ro, vec3 rd, out vec3 xo, out vec3 xd) {
     xo = ((sdfObjects[obj].worldToLocal * vec4(ro, 1.0)).xyz - f.origin.xyz) / f.origin.w;
@@ -240,11 +263,15 @@ void cellRay(uint obj, SdfField f, vec3 ro, vec3 rd, out vec3 xo, out vec3 xd) {
 
 #ifdef SDF_FIELDS
 // The first root in s in [0, 1] of the trilinear interpolant of the corners c (index x + 2y + 4z, c[0]
-// > 0 is not assumed) along the segment u(s) = ua + (ub - ua) s of the cell's unit cube; -1 when it
-// has none. Along a line the interpolant is a cubic; its extrema split [0, 1] into monotone pieces,
-// and the first piece whose far end is not above zero holds the root, found by regula falsi
-// (Illinois) on it.
-float cellFirstRoot(float c[8], vec3 ua, vec3 ub) {
+// > 0 is not assumed) along the segment u(s) = ua + (ub - ua) s of the cell's unit cube, in two
+// parts. Along a line the interpolant is a cubic; its extrema split [0, 1] into monotone pieces, and
+// the first piece whose far end is not above zero holds the root. cellRootPiece finds that piece:
+// false when there is none (no root), else the cubic's coefficients (a0 + a1 s + a2 s^2 + a3 s^3 as
+// x, y, z, w) and the piece (lo, hi, f(lo), f(hi); lo = hi = 0 when the segment starts on or below
+// zero). cellPieceRoot then finds the root on it by regula falsi (Illinois). The walk (cellStep)
+// only looks for the piece, cell after cell; the one solve runs after its loop (sdfMarch): a CPU
+// device runs a loop's body at least once per pass, whether a lane needs it or not.
+bool cellRootPiece(float c[8], vec3 ua, vec3 ub, out vec4 cubic, out vec4 piece) {
     float k0 = c[0], k1 = c[1] - c[0], k2 = c[2] - c[0], k3 = c[4] - c[0];
     float k4 = c[3] - c[2] - c[1] + c[0];  // xy
     float k5 = c[6] - c[4] - c[2] + c[0];  // yz
@@ -257,7 +284,9 @@ float cellFirstRoot(float c[8], vec3 ua, vec3 ub) {
     float a1 = k1 * P + k2 * Q + k3 * R + k4 * (p * Q + q * P) + k5 * (q * R + r * Q) + k6 * (p * R + r * P) +
                k7 * (p * q * R + p * r * Q + q * r * P);
     float a0 = k0 + k1 * p + k2 * q + k3 * r + k4 * p * q + k5 * q * r + k6 * p * r + k7 * p * q * r;
-    if (a0 <= 0.0) return 0.0;
+    cubic = vec4(a0, a1, a2, a3);
+    piece = vec4(0.0, 0.0, a0, a0);
+    if (a0 <= 0.0) return true;
     // The extrema: 3 a3 s^2 + 2 a2 s + a1 = 0 within (0, 1), in order.
     float e0 = 2.0, e1 = 2.0;
     float A = 3.0 * a3, B = 2.0 * a2, C = a1;
@@ -278,30 +307,37 @@ float cellFirstRoot(float c[8], vec3 ua, vec3 ub) {
         if (!(hi > lo && hi < 1.0) && i < 2) continue;
         float fhi = ((a3 * hi + a2) * hi + a1) * hi + a0;
         if (fhi <= 0.0) {
-            // f(lo) > 0 >= f(hi), monotone between: Illinois regula falsi.
-            int side = 0;
-            for (int k = 0; k < 24 && hi - lo > 1e-7; ++k) {
-                float m = (lo * fhi - hi * flo) / (fhi - flo);
-                if (!(m > lo && m < hi)) m = 0.5 * (lo + hi);
-                float fm = ((a3 * m + a2) * m + a1) * m + a0;
-                if (fm > 0.0) {
-                    lo = m;
-                    flo = fm;
-                    if (side == 1) fhi *= 0.5;
-                    side = 1;
-                } else {
-                    hi = m;
-                    fhi = fm;
-                    if (side == -1) flo *= 0.5;
-                    side = -1;
-                }
-            }
-            return hi;
+            piece = vec4(lo, hi, flo, fhi);  // f(lo) > 0 >= f(hi), monotone between
+            return true;
         }
         lo = hi;
         flo = fhi;
     }
-    return -1.0;
+    return false;
+}
+
+// The root on a piece of cellRootPiece (its hi end when the piece is empty).
+float cellPieceRoot(vec4 cubic, vec4 piece) {
+    float a0 = cubic.x, a1 = cubic.y, a2 = cubic.z, a3 = cubic.w;
+    float lo = piece.x, hi = piece.y, flo = piece.z, fhi = piece.w;
+    int side = 0;
+    for (int k = 0; k < 24 && hi - lo > 1e-7; ++k) {
+        float m = (lo * fhi - hi * flo) / (fhi - flo);
+        if (!(m > lo && m < hi)) m = 0.5 * (lo + hi);
+        float fm = ((a3 * m + a2) * m + a1) * m + a0;
+        if (fm > 0.0) {
+            lo = m;
+            flo = fm;
+            if (side == 1) fhi *= 0.5;
+            side = 1;
+        } else {
+            hi = m;
+            fhi = fm;
+            if (side == -1) flo *= 0.5;
+            side = -1;
+        }
+    }
+    return hi;
 }
 #endif
 
@@ -339,6 +375,7 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
     s.limit = int(trace.counts.w);
     s.result = -1.0;
     s.cells = false;
+    s.rootCell = false;
 #ifdef SDF_FIELDS
     uvec4 info = sdfObjects[obj].info;
     if (info.x == SDF_KIND_FIELD && s.limit > 0) {
@@ -363,6 +400,10 @@ void rootStart(inout RootSearch s, uint obj, vec3 ro, vec3 rd, float t0, float s
             s.cell = clamp(ivec3(floor(xo + xd * start)), ivec3(0), dims - 2);
             s.cellBase = ivec3(f.uvwOffset.xyz);
             s.cellLast = dims - 2;
+            // The first cell's face x = 0; its first step reads the face x = 1.
+            s.face = cellFaceValues(s.cellBase + s.cell, 0, 0);
+            s.faceAxis = 0;
+            s.faceSide = 1;
         }
     }
 #endif
@@ -504,11 +545,18 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     ++steps;
     s.r += 1;
     vec3 xo = s.xo, xd = s.xd;
-    ivec3 base = s.cellBase + s.cell;
+    // The cell's eight values: its far face on s.faceAxis read here, the other face kept from the
+    // cell before (corner k = x + 2y + 4z; constant indices only: a CPU device would keep a
+    // dynamically indexed vector in memory).
+    int a = s.faceAxis, farSide = s.faceSide;
+    vec4 f = cellFaceValues(s.cellBase + s.cell, a, farSide);
     float c[8];
     float cmin = 3.0e38;
     for (int k = 0; k < 8; ++k) {
-        c[k] = texelFetch(sdfAtlas, base + ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1), 0).r;
+        float cx = (k & 1) == farSide ? f[k >> 1] : s.face[k >> 1];
+        float cy = ((k >> 1) & 1) == farSide ? f[(k & 1) | ((k >> 2) << 1)] : s.face[(k & 1) | ((k >> 2) << 1)];
+        float cz = (k >> 2) == farSide ? f[k & 3] : s.face[k & 3];
+        c[k] = a == 0 ? cx : (a == 1 ? cy : cz);
         cmin = min(cmin, c[k]);
     }
     // Where the ray leaves the cell (the axis that it crosses first) or the walk ends.
@@ -518,9 +566,16 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     float tOut = max(min(min(min(tb.x, tb.y), tb.z), s.tb), tc);
     vec3 ua = xo + xd * tc - vec3(s.cell);
     if (cmin <= 0.0) {
-        float root = cellFirstRoot(c, ua, xo + xd * tOut - vec3(s.cell));
-        if (root >= 0.0) {
-            rootFinish(s, tc + root * (tOut - tc));
+        vec4 cubic, piece;
+        if (cellRootPiece(c, ua, xo + xd * tOut - vec3(s.cell), cubic, piece)) {
+            // The root lies in this cell, at tc + u (tOut - tc) with u = cellPieceRoot(cubic, piece):
+            // solved once the walk's loop is over (cellWalkRoot).
+            s.cubic = cubic;
+            s.piece = piece;
+            s.ta = tc;
+            s.tb = tOut;
+            s.rootCell = true;
+            s.done = true;
             return;
         }
     }
@@ -545,6 +600,18 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
         rootFinish(s, -1.0);
         return;
     }
+    // The face crossed: the next cell's first face, its far face on the same axis.
+    int la = leaves.x ? 0 : (leaves.y ? 1 : 2);
+    int side = (leaves.x ? xd.x : (leaves.y ? xd.y : xd.z)) > 0.0 ? 1 : 0;
+    for (int j = 0; j < 4; ++j) {
+        int u = j & 1, w = j >> 1;
+        float fx = side == 1 ? c[1 | (u << 1) | (w << 2)] : c[(u << 1) | (w << 2)];
+        float fy = side == 1 ? c[u | 2 | (w << 2)] : c[u | (w << 2)];
+        float fz = side == 1 ? c[u | (w << 1) | 4] : c[u | (w << 1)];
+        s.face[j] = la == 0 ? fx : (la == 1 ? fy : fz);
+    }
+    s.faceAxis = la;
+    s.faceSide = side;
     s.cell = next;
     s.ta = tOut;
 }
@@ -798,6 +865,7 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
 #ifdef SDF_FIELDS
             while (search.cells && rootNext(search, steps, stepLimit)) cellStep(search, ro, rd, steps);
+            if (search.rootCell) search.result = search.ta + cellPieceRoot(search.cubic, search.piece) * (search.tb - search.ta);
 #endif
             // The search of `decision` is over.
             float tj = search.result;
