@@ -66,9 +66,10 @@ rhi::SamplerHandle nearestSampler(GpuCache& cache) {
     return cache.sampler(d);
 }
 
-// One compute pass over jobs [first, first + count) of the frame's job buffer.
+// One compute pass over jobs [first, first + count) of the frame's job buffer: one workgroup per
+// job, or (packedVoxels > 0, the splat jobs) one invocation per voxel of their concatenated boxes.
 void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uint32_t first, uint32_t count,
-                   uint32_t objectCount) {
+                   uint32_t objectCount, uint32_t packedVoxels = 0) {
     const uint64_t objectsUniform = sdfObjectsUniformBytes(fc.device.info(), in.sdf.objectCount);
     const rhi::ShaderDesc& cs =
         program::compute(sdfSceneVariant<program::Variant>(in.sdf, objectsUniform > 0));
@@ -87,8 +88,8 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
             b.write(d.view.distance, rw);
             b.write(d.view.ids, rw);
         },
-        [&cache = fc.cache, &cs, pipeline, atlasSampler, first, count, objectCount, objectsUniform](
-            const UpdateData& d, fg::PassContext& ctx) {
+        [&cache = fc.cache, &cs, pipeline, atlasSampler, first, count, objectCount, objectsUniform,
+         packedVoxels](const UpdateData& d, fg::PassContext& ctx) {
             ctx.cmd.bindPipeline(pipeline);
             ShaderParams params(cs);
             setSdfScene(params, ctx, d.sdf, atlasSampler, objectsUniform);
@@ -99,10 +100,18 @@ void addUpdatePass(FrameContext& fc, const char* name, const UpdateData& in, uin
                 .setStorage("cacheDistanceImage", ctx.texture(d.view.distance))
                 .setStorage("cacheIdImage", ctx.texture(d.view.ids));
             if (!params.bind(ctx.cmd, cache, pipeline)) return;
-            for (uint32_t done = 0; done < count; done += kMaxGroupsPerDispatch) {
-                const program::PushConstants push{glm::uvec4(first + done, objectCount, 0u, 0u)};
+            constexpr uint32_t kGroupVoxels = 8 * 8 * 8;  // the shader's workgroup
+            const uint32_t groups =
+                packedVoxels > 0 ? (packedVoxels + kGroupVoxels - 1) / kGroupVoxels : count;
+            for (uint32_t done = 0; done < groups; done += kMaxGroupsPerDispatch) {
+                const program::PushConstants push =
+                    packedVoxels > 0
+                        ? program::PushConstants{glm::uvec4(first, objectCount, count, packedVoxels),
+                                                 glm::uvec4(done, 0u, 0u, 0u)}
+                        : program::PushConstants{glm::uvec4(first + done, objectCount, 0u, 0u),
+                                                 glm::uvec4(0u)};
                 ctx.cmd.pushConstants(&push, sizeof(push));
-                ctx.cmd.dispatch(std::min(kMaxGroupsPerDispatch, count - done));
+                ctx.cmd.dispatch(std::min(kMaxGroupsPerDispatch, groups - done));
             }
         });
 }
@@ -272,7 +281,9 @@ bool SdfWorldCache::add(FrameContext& fc, const SdfSceneData& scene, glm::vec3 c
         });
     const uint32_t splats = cm.splatJobCount(), total = uint32_t(cm.jobs().size());
     const uint32_t objectCount = uint32_t(objects.size());
-    if (splats > 0) addUpdatePass(fc, "sdf_world_cache_splat", in, 0, splats, objectCount);
+    const uint64_t splatVoxels = cm.stats().splatVoxels;  // at most the levels' voxels: fits 32 bits
+    if (splats > 0)
+        addUpdatePass(fc, "sdf_world_cache_splat", in, 0, splats, objectCount, uint32_t(splatVoxels));
     if (total > splats) addUpdatePass(fc, "sdf_world_cache", in, splats, total - splats, objectCount);
 
     m_report = {};

@@ -7,8 +7,9 @@
 // and imported into each frame's graph (importPersistent); recreated when the layout changes. Per
 // frame: the transfer pass "sdf_world_cache_upload" writes the levels table, the jobs and their
 // object lists planned by WorldCacheClipmap; the compute passes "sdf_world_cache_splat" (the
-// immediate min-splats of changed objects) and then "sdf_world_cache" (scrolled-in slabs, whole
-// levels, queued dirty bricks within the budget) run one workgroup per job. The view is published
+// immediate min-splats of changed objects, one invocation per voxel of their concatenated boxes)
+// and then "sdf_world_cache" (scrolled-in slabs, whole levels, queued dirty bricks within the
+// budget, one workgroup per job). The view is published
 // as SdfWorldCacheView; passes that use it are ordered after the update by the graph.
 #pragma once
 

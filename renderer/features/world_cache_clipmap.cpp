@@ -309,7 +309,7 @@ void WorldCacheClipmap::planScroll(const std::vector<glm::ivec3>& oldOrigin) {
 // level when it is new, re-indexed or reshaped) its old and new regions are queued and splatted,
 // and the level's reference becomes the current state. Removed objects queue their old regions.
 void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
-    std::map<CacheBrickKey, std::vector<uint32_t>> splats;  // ordered: deterministic job order
+    Splats splats;
     std::unordered_map<uint32_t, Tracked> now;
     now.reserve(objects.size());
     for (uint32_t i = 0; i < objects.size(); ++i) {
@@ -356,22 +356,23 @@ void WorldCacheClipmap::planChanges(const std::vector<ClipmapObject>& objects) {
                 markOldRegion(l, t, key, kCacheNone, splats);
         }
     m_tracked = std::move(now);
-    for (auto& [key, objs] : splats) {
+    for (auto& [key, splat] : splats) {
+        std::vector<uint32_t>& objs = splat.objects;
         std::sort(objs.begin(), objs.end());
         objs.erase(std::unique(objs.begin(), objs.end()), objs.end());
         uint32_t level;
         glm::ivec3 b;
         unpackBrick(key, level, b);
-        const CacheBox box = brickBox(level, b);
-        addJob(level, box, CacheJobMode::Splat, objs);
-        m_stats.splatVoxels += box.voxels();
+        addJob(level, splat.box, CacheJobMode::Splat, objs);
+        m_jobs.back().list.z = uint32_t(m_stats.splatVoxels);  // its first voxel in the packed dispatch
+        m_stats.splatVoxels += splat.box.voxels();
         ++m_splatJobs;
     }
 }
 
 // Queues the region of a tracked object's reference state on one level.
 void WorldCacheClipmap::markOldRegion(uint32_t level, const Tracked& t, uint32_t key, uint32_t splatObject,
-                                      std::map<CacheBrickKey, std::vector<uint32_t>>& splats) {
+                                      Splats& splats) {
     glm::vec3 lo(0.0f), hi(0.0f);
     if (!t.unbounded) {
         const auto c = worldCorners({key, t.reference[level], t.localMin, t.localMax});
@@ -385,10 +386,12 @@ void WorldCacheClipmap::markOldRegion(uint32_t level, const Tracked& t, uint32_t
 }
 
 // Queues the bricks of one level within T + s of the world box [lo, hi] (every brick of the
-// window when `everywhere`), and lists `splatObject` (kCacheNone: none) for their splat.
+// window when `everywhere`), and lists `splatObject` (kCacheNone: none) for their splat, which
+// covers the region's voxels in the brick only: a voxel whose cell lies farther than T + s from
+// the object's box (before and after the change) keeps its value and id (the object's truncated
+// distance there is T either way), so the splat's min and id reset would change nothing there.
 void WorldCacheClipmap::markRegion(uint32_t l, glm::vec3 lo, glm::vec3 hi, bool everywhere,
-                                   uint32_t splatObject,
-                                   std::map<CacheBrickKey, std::vector<uint32_t>>& splats) {
+                                   uint32_t splatObject, Splats& splats) {
     const int b = int(kCacheBrick);
     const float h = voxel(l), grow = kCacheTruncationVoxels * h + slack(l);
     CacheBox region = window(l);
@@ -404,8 +407,12 @@ void WorldCacheClipmap::markRegion(uint32_t l, glm::vec3 lo, glm::vec3 hi, bool 
             for (int x = b0.x; x <= b1.x; ++x) {
                 const CacheBrickKey key = brickKey(l, {x, y, z});
                 if (m_queued.insert(key).second) m_queue.push_back(key);
-                std::vector<uint32_t>& s = splats[key];
-                if (splatObject != kCacheNone) s.push_back(splatObject);
+                const CacheBox part = intersect(brickBox(l, {x, y, z}), region);
+                Splat& s = splats[key];
+                s.box = s.box.empty()
+                            ? part
+                            : CacheBox{glm::min(s.box.min, part.min), glm::max(s.box.max, part.max)};
+                if (splatObject != kCacheNone) s.objects.push_back(splatObject);
             }
 }
 

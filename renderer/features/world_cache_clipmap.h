@@ -44,7 +44,10 @@
 // T_i + s_i on each level it moved for; an added or removed object (or one whose index in the
 // frame's object array changed: ids are indices) on every level. Each queued brick gets an
 // immediate min-splat this frame (D = min(D, d_new - margin_i), id = UNCERTAIN unless NONE stays
-// true) so the cache is conservative before the queue reaches it. Queued bricks are recomputed
+// true) so the cache is conservative before the queue reaches it, over the brick's voxels within
+// T_i + s_i of the boxes that marked it (their bounding box in the brick): farther from both the
+// old and the new box the object's truncated distance is T_i before and after, so a voxel there
+// keeps a valid value and id. Queued bricks are recomputed
 // against only the objects whose grown box overlaps them (a uniform grid per level), at most
 // budgetVoxels per frame (at least one brick), the rest stays queued. Unbounded objects (planes)
 // take part everywhere; one that changes dirties every level.
@@ -186,10 +189,16 @@ private:
     void buildGrids();
     void planScroll(const std::vector<glm::ivec3>& oldOrigin);
     void planChanges(const std::vector<ClipmapObject>& objects);
-    void markOldRegion(uint32_t level, const Tracked& t, uint32_t key, uint32_t splatObject,
-                       std::map<CacheBrickKey, std::vector<uint32_t>>& splats);
+    // One brick's splat: the objects it takes, and the voxels it covers (the bounding box of the
+    // marked regions' parts in the brick).
+    struct Splat {
+        std::vector<uint32_t> objects;
+        CacheBox box;
+    };
+    using Splats = std::map<CacheBrickKey, Splat>;  // ordered: deterministic job order
+    void markOldRegion(uint32_t level, const Tracked& t, uint32_t key, uint32_t splatObject, Splats& splats);
     void markRegion(uint32_t level, glm::vec3 lo, glm::vec3 hi, bool everywhere, uint32_t splatObject,
-                    std::map<CacheBrickKey, std::vector<uint32_t>>& splats);
+                    Splats& splats);
     void drainQueue(uint32_t budget);
     void addBoxJobs(uint32_t level, const CacheBox& box, CacheJobMode mode, uint64_t& counter);
     void addJob(uint32_t level, const CacheBox& box, CacheJobMode mode, const std::vector<uint32_t>& objects);

@@ -1,6 +1,11 @@
 // sdf_world_cache_update: recomputes or splats boxes of the world SDF cache (renderer/features/
 // world_cache_clipmap.h documents the values and margins, sdf_world_cache.h the passes). One
-// workgroup per job (a box of at most 8^3 voxels of one level), one invocation per voxel:
+// invocation per voxel of a job (a box of at most 8^3 voxels of one level). Recompute jobs: one
+// workgroup per job. Splat jobs (their boxes are the parts of bricks near a changed object, often
+// smaller than a brick): packed, the dispatch's invocations run over the concatenated voxels of
+// all the splat jobs (each job's first index in list.z, found by a binary search), so no
+// workgroup runs idle lanes for the voxels of a brick outside the box (a CPU device runs all of a
+// SIMD group's code even when every lane of it has returned).
 //   recompute: D = min(T, d_1) - margin over the job's objects (every object within T + slack of
 //              the box), id = the nearest when d_2 - U >= sqrt(3) h + 2 slack, U an upper bound at c
 //              of its true distance and of the distance the trace steps on it (upperDistance: exact
@@ -28,7 +33,7 @@ layout(local_size_x = 8, local_size_y = 8, local_size_z = 8) in;
 struct CacheJob {
     ivec4 origin;  // xyz first voxel, w level
     uvec4 size;    // xyz voxels per axis, w mode (0 recompute, 1 splat)
-    uvec4 list;    // x first index into cacheObjectList, y count
+    uvec4 list;    // x first index into cacheObjectList, y count, z (splat jobs) first packed voxel
 };
 layout(set = 2, binding = 4, std430) readonly buffer CacheJobs { CacheJob cacheJobs[]; };
 layout(set = 2, binding = 5, std430) readonly buffer CacheObjectList { uint cacheObjectList[]; };
@@ -41,7 +46,9 @@ layout(set = 2, binding = 8, r32ui) uniform uimage3D cacheIdImage;
 layout(set = 2, binding = 9, std430) readonly buffer CacheObjectFlags { uint cacheObjectFlags[]; };
 
 layout(push_constant) uniform SdfWorldCacheUpdate {
-    uvec4 jobs;  // x first job of this dispatch, y object count of the frame
+    uvec4 jobs;    // x first job of this dispatch, y object count of the frame, z packed jobs (0: one
+                   // workgroup per job), w their voxels
+    uvec4 packed;  // x (packed) the first workgroup of this dispatch
 } pc;
 
 const uint kModeSplat = 1u;
@@ -112,9 +119,27 @@ float objectLowerBound(uint o, vec3 pl, float box, out vec2 rawBound) {
 }
 
 void main() {
-    const CacheJob job = cacheJobs[pc.jobs.x + gl_WorkGroupID.x];
-    const uvec3 local = gl_LocalInvocationID;
-    if (any(greaterThanEqual(local, job.size.xyz))) return;
+    CacheJob job;
+    uvec3 local;
+    if (pc.jobs.z > 0u) {
+        // Packed: voxel g of the concatenated boxes (x fastest within a box); its job is the last
+        // one whose first packed voxel is at most g.
+        const uint g = (pc.packed.x + gl_WorkGroupID.x) * 512u + gl_LocalInvocationIndex;
+        if (g >= pc.jobs.w) return;
+        uint lo = 0u, hi = pc.jobs.z - 1u;
+        while (lo < hi) {
+            const uint mid = (lo + hi + 1u) / 2u;
+            if (cacheJobs[pc.jobs.x + mid].list.z <= g) lo = mid;
+            else hi = mid - 1u;
+        }
+        job = cacheJobs[pc.jobs.x + lo];
+        const uint i = g - job.list.z;
+        local = uvec3(i % job.size.x, i / job.size.x % job.size.y, i / (job.size.x * job.size.y));
+    } else {
+        job = cacheJobs[pc.jobs.x + gl_WorkGroupID.x];
+        local = gl_LocalInvocationID;
+        if (any(greaterThanEqual(local, job.size.xyz))) return;
+    }
     const uint level = uint(job.origin.w);
     const int r = int(cacheInfo.y);
     const SdfCacheLevel lv = cacheLevels[level];

@@ -5,6 +5,7 @@
 // overlapping objects plus every unbounded one. Each assertion states its metric next to it.
 #include <algorithm>
 #include <cstdio>
+#include <map>
 #include <random>
 #include <set>
 #include <tuple>
@@ -71,6 +72,38 @@ uint64_t expectedBrickVoxels(const WorldCacheClipmap& c,
     return voxels;
 }
 
+// The voxels the splats of those boxes cover: in every such brick, the bounding box of the parts
+// of the grown boxes (voxel ranges, clipped to the window) that reach into it.
+uint64_t expectedSplatVoxels(const WorldCacheClipmap& c,
+                             const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
+    std::map<std::tuple<uint32_t, int, int, int>, std::pair<glm::ivec3, glm::ivec3>> parts;
+    for (uint32_t l = 0; l < c.levelCount(); ++l) {
+        const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack(l);
+        const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
+        for (const auto& [lo, hi] : boxes) {
+            glm::ivec3 a(glm::floor(glm::dvec3(lo - g) / double(h))),
+                b(glm::floor(glm::dvec3(hi + g) / double(h)));
+            a = glm::max(a, wo);
+            b = glm::min(b, w1 - 1);  // inclusive
+            for (int z = floorDiv(a.z, 8); z <= floorDiv(b.z, 8); ++z)
+                for (int y = floorDiv(a.y, 8); y <= floorDiv(b.y, 8); ++y)
+                    for (int x = floorDiv(a.x, 8); x <= floorDiv(b.x, 8); ++x) {
+                        const glm::ivec3 brick(x, y, z);
+                        const glm::ivec3 p0 = glm::max(a, brick * 8), p1 = glm::min(b + 1, brick * 8 + 8);
+                        auto [it, added] = parts.insert({{l, x, y, z}, {p0, p1}});
+                        if (!added)
+                            it->second = {glm::min(it->second.first, p0), glm::max(it->second.second, p1)};
+                    }
+        }
+    }
+    uint64_t voxels = 0;
+    for (const auto& [key, box] : parts) {
+        const glm::ivec3 e = box.second - box.first;
+        voxels += uint64_t(e.x) * uint64_t(e.y) * uint64_t(e.z);
+    }
+    return voxels;
+}
+
 TEST(WorldCacheClipmap, FirstFrameFillsEveryNeededLevel) {
     WorldCacheClipmap c;
     c.update(settings(), {0.1f, 0.1f, 0.1f}, spreadScene());
@@ -126,15 +159,24 @@ TEST(WorldCacheClipmap, ChangedObjectsQueueOnlyTheirOldAndNewRegions) {
                 (unsigned long long)c.stats().dirtyVoxels, (unsigned long long)expected,
                 (unsigned long long)c.stats().splatVoxels);
     EXPECT_EQ(c.stats().dirtyVoxels, expected);  // exactly the bricks of old + new bounds (+ T + s)
-    EXPECT_EQ(c.stats().splatVoxels, expected);  // the same bricks get the immediate splat
+    // The same bricks get the immediate splat, over the voxels within T + s of the boxes only.
+    const uint64_t splat = expectedSplatVoxels(c, {{oldC - 0.5f, oldC + 0.5f}, {newC - 0.5f, newC + 0.5f}});
+    std::printf("  splat voxels expected %llu\n", (unsigned long long)splat);
+    EXPECT_EQ(c.stats().splatVoxels, splat);
+    EXPECT_LT(splat, expected);  // the bricks' voxels beyond T + s are left out
     EXPECT_EQ(c.stats().scrollVoxels, 0u);
     EXPECT_LT(expected, uint64_t(c.levelCount()) * 64 * 64 * 64 / 4);  // a small part of the windows
     // Every splat job lists the moved object (index 1), and only it.
+    // Their first voxels in the packed splat dispatch are the running sum of their boxes' voxels.
+    uint64_t packed = 0;
     for (uint32_t j = 0; j < c.splatJobCount(); ++j) {
         const CacheJob& job = c.jobs()[j];
         ASSERT_EQ(job.list.y, 1u);
         EXPECT_EQ(c.objectList()[job.list.x], 1u);
+        EXPECT_EQ(job.list.z, packed);
+        packed += uint64_t(job.size.x) * job.size.y * job.size.z;
     }
+    EXPECT_EQ(packed, splat);
     // A removed object queues its old region; an index change (the array reordered) is a move.
     objects.erase(objects.begin());  // key 1 removed; keys 2, 3 shift to indices 0, 1
     c.update(settings(1u << 20, 64), cam, objects);
