@@ -44,10 +44,13 @@ ClipmapSettings settings(uint32_t budget = 1u << 20, uint32_t res = 32) { return
 
 int floorDiv(int a, int b) { return a >= 0 ? a / b : -((-a + b - 1) / b); }
 
-// The voxels of every brick (clipped to its window) within T + s of one of the world boxes.
-uint64_t expectedBrickVoxels(const WorldCacheClipmap& c,
-                             const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
-    std::set<std::tuple<uint32_t, int, int, int>> bricks;
+using Boxes = std::vector<std::pair<glm::vec3, glm::vec3>>;
+using BrickKey = std::tuple<uint32_t, int, int, int>;  // level, brick x, y, z
+
+// Calls f(brick, p0, p1) for every brick of every level that one of the world boxes grown by T + s
+// reaches, with [p0, p1) the grown box's voxels in that brick (clipped to the window).
+template <typename F>
+void forEachGrownBrick(const WorldCacheClipmap& c, const Boxes& boxes, F&& f) {
     for (uint32_t l = 0; l < c.levelCount(); ++l) {
         const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack(l);
         const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
@@ -56,51 +59,44 @@ uint64_t expectedBrickVoxels(const WorldCacheClipmap& c,
             glm::ivec3 a(glm::floor(glm::dvec3(lo - g) / double(h))),
                 b(glm::floor(glm::dvec3(hi + g) / double(h)));
             a = glm::max(a, wo);
-            b = glm::min(b, w1 - 1);
-            for (int z = floorDiv(a.z, 8); z <= floorDiv(b.z, 8); ++z)
-                for (int y = floorDiv(a.y, 8); y <= floorDiv(b.y, 8); ++y)
-                    for (int x = floorDiv(a.x, 8); x <= floorDiv(b.x, 8); ++x) bricks.insert({l, x, y, z});
-        }
-    }
-    uint64_t voxels = 0;
-    for (const auto& [l, x, y, z] : bricks) {
-        const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
-        const glm::ivec3 a = glm::max(glm::ivec3(x, y, z) * 8, wo),
-                         b = glm::min(glm::ivec3(x, y, z) * 8 + 8, w1);
-        if (glm::all(glm::lessThan(a, b))) voxels += uint64_t(b.x - a.x) * (b.y - a.y) * (b.z - a.z);
-    }
-    return voxels;
-}
-
-// The voxels the splats of those boxes cover: in every such brick, the bounding box of the parts
-// of the grown boxes (voxel ranges, clipped to the window) that reach into it.
-uint64_t expectedSplatVoxels(const WorldCacheClipmap& c,
-                             const std::vector<std::pair<glm::vec3, glm::vec3>>& boxes) {
-    std::map<std::tuple<uint32_t, int, int, int>, std::pair<glm::ivec3, glm::ivec3>> parts;
-    for (uint32_t l = 0; l < c.levelCount(); ++l) {
-        const float h = c.voxel(l), g = kCacheTruncationVoxels * h + c.slack(l);
-        const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
-        for (const auto& [lo, hi] : boxes) {
-            glm::ivec3 a(glm::floor(glm::dvec3(lo - g) / double(h))),
-                b(glm::floor(glm::dvec3(hi + g) / double(h)));
-            a = glm::max(a, wo);
             b = glm::min(b, w1 - 1);  // inclusive
             for (int z = floorDiv(a.z, 8); z <= floorDiv(b.z, 8); ++z)
                 for (int y = floorDiv(a.y, 8); y <= floorDiv(b.y, 8); ++y)
                     for (int x = floorDiv(a.x, 8); x <= floorDiv(b.x, 8); ++x) {
                         const glm::ivec3 brick(x, y, z);
-                        const glm::ivec3 p0 = glm::max(a, brick * 8), p1 = glm::min(b + 1, brick * 8 + 8);
-                        auto [it, added] = parts.insert({{l, x, y, z}, {p0, p1}});
-                        if (!added)
-                            it->second = {glm::min(it->second.first, p0), glm::max(it->second.second, p1)};
+                        f(BrickKey{l, x, y, z}, glm::max(a, brick * 8), glm::min(b + 1, brick * 8 + 8));
                     }
         }
     }
+}
+
+uint64_t boxVoxels(glm::ivec3 p0, glm::ivec3 p1) {
+    const glm::ivec3 e = p1 - p0;
+    return glm::all(glm::greaterThan(e, glm::ivec3(0))) ? uint64_t(e.x) * uint64_t(e.y) * uint64_t(e.z) : 0;
+}
+
+// The voxels of every brick (clipped to its window) within T + s of one of the world boxes.
+uint64_t expectedBrickVoxels(const WorldCacheClipmap& c, const Boxes& boxes) {
+    std::set<BrickKey> bricks;
+    forEachGrownBrick(c, boxes, [&](const BrickKey& key, glm::ivec3, glm::ivec3) { bricks.insert(key); });
     uint64_t voxels = 0;
-    for (const auto& [key, box] : parts) {
-        const glm::ivec3 e = box.second - box.first;
-        voxels += uint64_t(e.x) * uint64_t(e.y) * uint64_t(e.z);
+    for (const auto& [l, x, y, z] : bricks) {
+        const glm::ivec3 wo = c.origin(l), w1 = wo + glm::ivec3(int(c.resolution()));
+        voxels += boxVoxels(glm::max(glm::ivec3(x, y, z) * 8, wo), glm::min(glm::ivec3(x, y, z) * 8 + 8, w1));
     }
+    return voxels;
+}
+
+// The voxels the splats of those boxes cover: in every such brick, the bounding box of the parts
+// of the grown boxes that reach into it.
+uint64_t expectedSplatVoxels(const WorldCacheClipmap& c, const Boxes& boxes) {
+    std::map<BrickKey, std::pair<glm::ivec3, glm::ivec3>> parts;
+    forEachGrownBrick(c, boxes, [&](const BrickKey& key, glm::ivec3 p0, glm::ivec3 p1) {
+        auto [it, added] = parts.insert({key, {p0, p1}});
+        if (!added) it->second = {glm::min(it->second.first, p0), glm::max(it->second.second, p1)};
+    });
+    uint64_t voxels = 0;
+    for (const auto& [key, box] : parts) voxels += boxVoxels(box.first, box.second);
     return voxels;
 }
 
