@@ -194,13 +194,14 @@ float sceneDistance(vec3 p, float tFrom, float safety, uint only, out uint neare
 // interpolant of the cell's eight stored values along the ray (a cubic: cellRootPiece and
 // cellPieceRoot), exactly, without the filter and without steps that could pass a thin part; a cell
 // whose values are all above zero has none. Each cell shares the face the walk enters it by with
-// the cell before, so a step reads only the four values of its far face (cellFaceValues). The walk is bounded by the march's step limit only (each cell one step),
-// and it ends at a root, at tEnd or where the ray leaves B, or (the candidate's own object, whose
-// near miss lets the march go on) after a cell whose values are all at least eps: its far side is
-// tPast. So the first root of a field, and the hit, do not depend on where the search starts: the
-// tile's cone, the world cache, culling and over-relaxation all move that point. The march's own
-// steps on a field are bounded by the distance to the interpolant's zero set as well
-// (marchLocalDistance), so that no step passes a part of it before a search starts.
+// the cell before, so a step reads only the four values of its far face (cellFaceValues). The walk
+// is bounded by the march's step limit only (each cell one step), and it ends at a root, at tEnd or
+// where the ray leaves B, or (the candidate's own object, whose near miss lets the march go on)
+// after a cell whose values are all at least eps: its far side is tPast. So the first root of a
+// field, and the hit, do not depend on where the search starts: the tile's cone, the world cache,
+// culling and over-relaxation all move that point. The march's own steps on a field are bounded by
+// the distance to the interpolant's zero set as well (marchLocalDistance), so that no step passes a
+// part of it before a search starts.
 //
 // The search is a resumable state machine: rootNext says where to evaluate next (or that the
 // search is over), the decision loop of sdfMarch evaluates the object there (objectRawDistance) or
@@ -554,7 +555,8 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     float cmin = 3.0e38;
     for (int k = 0; k < 8; ++k) {
         float cx = (k & 1) == farSide ? f[k >> 1] : s.face[k >> 1];
-        float cy = ((k >> 1) & 1) == farSide ? f[(k & 1) | ((k >> 2) << 1)] : s.face[(k & 1) | ((k >> 2) << 1)];
+        int jy = (k & 1) | ((k >> 2) << 1);  // the corner's index on a face of the y axis
+        float cy = ((k >> 1) & 1) == farSide ? f[jy] : s.face[jy];
         float cz = (k >> 2) == farSide ? f[k & 3] : s.face[k & 3];
         c[k] = a == 0 ? cx : (a == 1 ? cy : cz);
         cmin = min(cmin, c[k]);
@@ -568,8 +570,8 @@ void cellStep(inout RootSearch s, vec3 ro, vec3 rd, inout uint steps) {
     if (cmin <= 0.0) {
         vec4 cubic, piece;
         if (cellRootPiece(c, ua, xo + xd * tOut - vec3(s.cell), cubic, piece)) {
-            // The root lies in this cell, at tc + u (tOut - tc) with u = cellPieceRoot(cubic, piece):
-            // solved once the walk's loop is over (cellWalkRoot).
+            // The root lies in this cell, at tc + u (tOut - tc) with u = cellPieceRoot(cubic, piece),
+            // solved once the walk's loop is over (sdfMarch).
             s.cubic = cubic;
             s.piece = piece;
             s.ta = tc;
@@ -865,7 +867,9 @@ bool sdfMarch(vec3 ro, vec3 rd, float tMin, float tMax, uint stepLimit, inout fl
                 rootTake(search, objectRawDistance(search.obj, ro + rd * search.tr), steps);
 #ifdef SDF_FIELDS
             while (search.cells && rootNext(search, steps, stepLimit)) cellStep(search, ro, rd, steps);
-            if (search.rootCell) search.result = search.ta + cellPieceRoot(search.cubic, search.piece) * (search.tb - search.ta);
+            // A walk that found its root's cell: the root there (one solve per search).
+            if (search.rootCell)
+                search.result = search.ta + cellPieceRoot(search.cubic, search.piece) * (search.tb - search.ta);
 #endif
             // The search of `decision` is over.
             float tj = search.result;
