@@ -110,16 +110,16 @@ void addDebugView(FrameContext& fc, const DebugViewDesc& desc) {
     const SdfTileLists* tiles = tileLists(fc, desc.view);
     const SdfSceneBuffers* sdf = fc.board.find<SdfSceneBuffers>();
     using V = program::Variant;
-    const V variant = tiles                  ? V::Tiles
-                      : effect.isValid()       ? V::Effects
+    const V variant = tiles                      ? V::Tiles
+                      : effect.isValid()         ? V::Effects
                       : gbuffer.albedo.isValid() ? (aux ? V::AlbedoAux : V::Albedo)
                                                  : (aux ? V::Aux : V::Default);
     const FullscreenProgram prog =
         fullscreenProgram(fc, program::vertex(variant), program::fragment(variant));
     // 2. The push-constant block, through the struct shaderc generated from the shader.
-    const program::PushConstants push{glm::uvec4(uint32_t(desc.view) - 1, tiles ? tiles->tilesX : 0,
-                                                 sdf ? sdf->tracedCount : 0, 0),
-                                      glm::vec4(desc.depthRange, float(std::max(desc.stepLimit, 1u)), 0, 0)};
+    const program::PushConstants push{
+        glm::uvec4(uint32_t(desc.view) - 1, tiles ? tiles->tilesX : 0, sdf ? sdf->tracedCount : 0, 0),
+        glm::vec4(desc.depthRange, float(std::max(desc.stepLimit, 1u)), 0, 0)};
     fc.graph.addPass<Data>(
         "debug_view", fg::PassKind::Raster,
         // 3. Declare what the pass reads and writes; the graph places the barriers.

@@ -77,7 +77,8 @@ struct DebugViewDesc {
 };
 
 // Reads SceneBuffers and GBuffer (gbuffer.aux for ids and steps, Effects for the effect views),
-// writes Output. Field-slice reads SceneBuffers and SdfSceneBuffers instead (renderer/features/debug_field_slice.h).
+// writes Output. Field-slice reads SceneBuffers and SdfSceneBuffers instead
+// (renderer/features/debug_field_slice.h).
 void addDebugView(FrameContext& fc, const DebugViewDesc& desc);
 
 }  // namespace penumbra::render

@@ -529,7 +529,7 @@ private:
     std::optional<FrameTimings> readTimings(TimingFrame& t, bool blocking);
     TimingFrame& currentTimingFrame() { return m_timingRing[m_frame % kTimingFramesInFlight]; }
 
-    std::unordered_map<uint32_t, rhi::Access> m_persistent;        // texture handle -> state
+    std::unordered_map<uint32_t, rhi::Access> m_persistent;         // texture handle -> state
     std::unordered_map<uint32_t, rhi::Access> m_persistentBuffers;  // buffer handle -> state
 
     TimingFrame m_timingRing[kTimingFramesInFlight];

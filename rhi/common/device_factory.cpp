@@ -23,7 +23,8 @@ std::unique_ptr<Device> createDevice(const DeviceDesc& descIn) {
     if (desc.backend == Backend::Auto) {
         if (const char* env = std::getenv("PENUMBRA_BACKEND"); env && *env) {
             Backend b;
-            if (parseBackend(env, b)) desc.backend = b;
+            if (parseBackend(env, b))
+                desc.backend = b;
             else
                 detail::logMessage(desc.log, LogSeverity::Warning,
                                    std::string("PENUMBRA_BACKEND='") + env +
@@ -44,9 +45,15 @@ std::unique_ptr<Device> createDevice(const DeviceDesc& descIn) {
 
     std::unique_ptr<Device> device;
     switch (desc.backend) {
-        case Backend::Vulkan: device = detail::createVulkanDevice(desc); break;
-        case Backend::OpenGL: device = detail::createOpenGLDevice(desc); break;
-        case Backend::Null: device = detail::createNullDevice(desc); break;
+        case Backend::Vulkan:
+            device = detail::createVulkanDevice(desc);
+            break;
+        case Backend::OpenGL:
+            device = detail::createOpenGLDevice(desc);
+            break;
+        case Backend::Null:
+            device = detail::createNullDevice(desc);
+            break;
         case Backend::Auto:
             device = detail::createVulkanDevice(desc);
             if (!device) {

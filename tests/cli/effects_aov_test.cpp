@@ -57,14 +57,15 @@ TEST(EffectAovs, ParsesNamesAndLightIndices) {
 // 3x2 pixels, pixel 1 and 3 background (depth 0).
 struct Fixture {
     static constexpr uint32_t kW = 3, kH = 2;
-    TargetTexels depth = texels(rhi::Format::R32_FLOAT, std::vector<float>{1.5f, 0.0f, 2.0f, 0.0f, 7.0f, 9.0f});
+    TargetTexels depth =
+        texels(rhi::Format::R32_FLOAT, std::vector<float>{1.5f, 0.0f, 2.0f, 0.0f, 7.0f, 9.0f});
 };
 
 TEST(EffectAovs, ShadowLayers) {
     Fixture f;
     // two layers: row 0 = layer 0 (x 0..2) then layer 1 (x 3..5); row 1 likewise
-    const TargetTexels shadow = texels(rhi::Format::R8_UNORM,
-                                       std::vector<uint8_t>{255, 200, 0, 10, 20, 30, 51, 255, 102, 40, 50, 60});
+    const TargetTexels shadow = texels(
+        rhi::Format::R8_UNORM, std::vector<uint8_t>{255, 200, 0, 10, 20, 30, 51, 255, 102, 40, 50, 60});
     reference::FloatImage img;
     std::string error;
     AovOutput a{RenderAov::Shadow, "s.pfm", 0};
@@ -92,11 +93,12 @@ TEST(EffectAovs, AoBentNormalAndThickness) {
     const TargetTexels aoTexels = texels(rhi::Format::RGBA8_UNORM, ao);
     reference::FloatImage img;
     std::string error;
-    ASSERT_TRUE(cli::convertEffectAov({RenderAov::Ao, "a.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img, error));
+    ASSERT_TRUE(
+        cli::convertEffectAov({RenderAov::Ao, "a.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img, error));
     EXPECT_FLOAT_EQ(img.data[2], 80 / 255.0f);
     EXPECT_EQ(img.data[1], 0.0f);  // background
-    ASSERT_TRUE(
-        cli::convertEffectAov({RenderAov::BentNormal, "b.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img, error));
+    ASSERT_TRUE(cli::convertEffectAov({RenderAov::BentNormal, "b.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img,
+                                      error));
     ASSERT_EQ(img.channels, 3u);
     for (size_t i : {0u, 2u, 4u, 5u}) {
         const glm::vec3 n(img.data[i * 3], img.data[i * 3 + 1], img.data[i * 3 + 2]);
@@ -107,11 +109,13 @@ TEST(EffectAovs, AoBentNormalAndThickness) {
     std::vector<uint16_t> half;
     for (float t : {0.25f, 3.0f, 0.0f, 1.0f, 12.5f, 0.0f}) half.push_back(glm::packHalf1x16(t));
     const TargetTexels thick = texels(rhi::Format::R16_FLOAT, half);
-    ASSERT_TRUE(cli::convertEffectAov({RenderAov::Thickness, "t.pfm", 0}, f.kW, f.kH, f.depth, thick, img, error));
+    ASSERT_TRUE(
+        cli::convertEffectAov({RenderAov::Thickness, "t.pfm", 0}, f.kW, f.kH, f.depth, thick, img, error));
     const std::vector<float> want = {0.25f, 0.0f, 0.0f, 0.0f, 12.5f, 0.0f};  // background 0
     for (size_t i = 0; i < 6; ++i) EXPECT_FLOAT_EQ(img.data[i], want[i]) << i;
     // a wrong format is an error
-    EXPECT_FALSE(cli::convertEffectAov({RenderAov::Thickness, "t.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img, error));
+    EXPECT_FALSE(
+        cli::convertEffectAov({RenderAov::Thickness, "t.pfm", 0}, f.kW, f.kH, f.depth, aoTexels, img, error));
 }
 
 }  // namespace

@@ -65,7 +65,8 @@ std::string aoScene(const char* variant) {
   "materials": {"white": {"baseColor": [0.8, 0.8, 0.78], "roughness": 0.9},
                 "clay": {"baseColor": [0.75, 0.45, 0.3], "roughness": 0.8}},
   "entities": [
-    )" + kCamera + R"(,
+    )" + kCamera +
+           R"(,
     {"name": "sun", "transform": {"eulerDegrees": [-60, 20, 0]},
      "light": {"type": "directional", "intensity": 0.4, "castShadows": false}},
     {"name": "floor", "sdf": {"shape": {"shape": "plane", "normal": [0, 1, 0], "offset": 0}, "material": "white"}},
@@ -102,7 +103,8 @@ std::string shadowScene(bool hard) {
                 "red": {"baseColor": [0.8, 0.2, 0.15], "roughness": 0.5},
                 "blue": {"baseColor": [0.2, 0.35, 0.8], "roughness": 0.4}},
   "entities": [
-    )" + kCamera + R"(,
+    )" + kCamera +
+           R"(,
     {"name": "sun", "transform": {"eulerDegrees": [-38, -65, 0]},
      "light": {"type": "directional", "intensity": 1.5, "color": [1.0, 0.95, 0.88], "angularRadiusDegrees": 4}},
     {"name": "bulb", "transform": {"position": [1.6, 2.2, 1.2]},
@@ -133,8 +135,8 @@ std::string eightLightsScene() {
                       R"({"name": "light %d", "transform": {"position": [%.4f, %.2f, %.4f]},
      "light": {"type": "%s", %s"intensity": 1.0, "color": %s, "range": 8}},
     )",
-                      i, 0.8 * std::cos(a), i % 2 ? 2.0 : 2.3, 0.8 * std::sin(a) - 0.2, i % 2 ? "point" : "sphere",
-                      i % 2 ? "" : R"("radius": 0.1, )", colours[i]);
+                      i, 0.8 * std::cos(a), i % 2 ? 2.0 : 2.3, 0.8 * std::sin(a) - 0.2,
+                      i % 2 ? "point" : "sphere", i % 2 ? "" : R"("radius": 0.1, )", colours[i]);
         lights += buf;
     }
     return std::string(R"({
@@ -144,7 +146,8 @@ std::string eightLightsScene() {
              "shadows": {"resolutionScale": 1}},
   "materials": {"white": {"baseColor": [0.8, 0.8, 0.8], "roughness": 0.7}},
   "entities": [
-    )") + kCamera + ",\n    " + lights +
+    )") + kCamera +
+           ",\n    " + lights +
            R"({"name": "floor", "sdf": {"shape": {"shape": "plane", "normal": [0, 1, 0], "offset": 0}, "material": "white"}},
     {"name": "ball", "transform": {"position": [0, 0.35, -0.8]},
      "sdf": {"shape": {"shape": "sphere", "radius": 0.35}, "material": "white"}},
@@ -168,7 +171,8 @@ std::string thicknessScene() {
     "skin": {"baseColor": [0.8, 0.5, 0.4], "subsurface": 0.5, "subsurfaceColor": [1, 0.3, 0.2], "subsurfaceRadius": 0.2},
     "opaque": {"baseColor": [0.5, 0.5, 0.5]}},
   "entities": [
-    )") + kCamera + R"(,
+    )") + kCamera +
+           R"(,
     {"name": "sun", "transform": {"eulerDegrees": [-50, 30, 0]}, "light": {"type": "directional", "intensity": 2}},
     {"name": "floor", "sdf": {"shape": {"shape": "plane", "normal": [0, 1, 0], "offset": 0}, "material": "opaque"}},
     {"name": "wax ball", "transform": {"position": [-1.1, 0.55, -0.2]},

@@ -67,7 +67,8 @@ Pixel scenePixel(uint32_t x, uint32_t y) {
     p = {kWall, 10.0f, {0, 0, 1}};
     if (d.y < 0.0f && -1.0f / d.y < p.depth) p = {kFloor, -1.0f / d.y, {0, 1, 0}};
     const glm::vec3 boxHit = d * 3.0f;
-    if (boxHit.x > -0.9f && boxHit.x < 0.1f && boxHit.y > -0.6f && boxHit.y < 0.5f) p = {kBox, 3.0f, {0, 0, 1}};
+    if (boxHit.x > -0.9f && boxHit.x < 0.1f && boxHit.y > -0.6f && boxHit.y < 0.5f)
+        p = {kBox, 3.0f, {0, 0, 1}};
     const glm::vec3 c(1.2f, 0.0f, -4.0f);
     const float b = glm::dot(d, c), a = glm::dot(d, d), disc = b * b - a * (glm::dot(c, c) - 0.36f);
     if (disc > 0.0f) {
@@ -81,7 +82,8 @@ Pixel scenePixel(uint32_t x, uint32_t y) {
 // are the two shadow layers, 2 the AO.
 float truth(const Pixel& p, uint32_t x, uint32_t y, int channel) {
     if (p.surface == kBackground) return 1.0f;
-    static constexpr float kBase[3][4] = {{0.9f, 0.6f, 0.1f, 0.35f}, {0.3f, 0.9f, 0.6f, 0.05f}, {0.85f, 0.55f, 0.3f, 0.1f}};
+    static constexpr float kBase[3][4] = {
+        {0.9f, 0.6f, 0.1f, 0.35f}, {0.3f, 0.9f, 0.6f, 0.05f}, {0.85f, 0.55f, 0.3f, 0.1f}};
     const float ripple = 0.08f * std::sin(float(x) * 6.2831853f / 64.0f + float(channel)) *
                          std::cos(float(y) * 6.2831853f / 48.0f);
     return std::clamp(kBase[channel][p.surface] + ripple, 0.0f, 1.0f);
@@ -109,8 +111,8 @@ protected:
     }
     const Pixel& at(uint32_t x, uint32_t y) const { return scene[size_t(y) * kW + x]; }
 
-    rhi::TextureHandle texture(rhi::Format f, uint32_t w, uint32_t h, rhi::TextureUsage usage, const char* name,
-                               const void* data = nullptr, size_t bytes = 0) {
+    rhi::TextureHandle texture(rhi::Format f, uint32_t w, uint32_t h, rhi::TextureUsage usage,
+                               const char* name, const void* data = nullptr, size_t bytes = 0) {
         rhi::TextureDesc d;
         d.format = f;
         d.width = w;
@@ -131,7 +133,8 @@ protected:
         std::vector<uint16_t> normal(kW * kH * 2);
         for (size_t i = 0; i < scene.size(); ++i) {
             depth[i] = scene[i].depth;
-            const glm::vec2 e = scene[i].surface == kBackground ? glm::vec2(0) : render::octEncode(scene[i].normal);
+            const glm::vec2 e =
+                scene[i].surface == kBackground ? glm::vec2(0) : render::octEncode(scene[i].normal);
             normal[i * 2] = glm::packHalf1x16(e.x);
             normal[i * 2 + 1] = glm::packHalf1x16(e.y);
         }
@@ -140,33 +143,39 @@ protected:
             for (uint32_t y = 0; y < sh; ++y)
                 for (uint32_t x = 0; x < sw; ++x) {
                     const uint32_t fx = fullPixel(x, sw, kW), fy = fullPixel(y, sh, kH);
-                    lowShadow[size_t(y) * sw * layers + l * sw + x] = unorm8(truth(at(fx, fy), fx, fy, int(l)));
+                    lowShadow[size_t(y) * sw * layers + l * sw + x] =
+                        unorm8(truth(at(fx, fy), fx, fy, int(l)));
                 }
         for (uint32_t y = 0; y < ah; ++y)
             for (uint32_t x = 0; x < aw; ++x) {
                 const uint32_t fx = fullPixel(x, aw, kW), fy = fullPixel(y, ah, kH);
                 const Pixel& p = at(fx, fy);
                 const glm::vec3 bent = p.normal * 0.5f + 0.5f;
-                const uint8_t px[4] = {unorm8(truth(p, fx, fy, 2)), unorm8(bent.x), unorm8(bent.y), unorm8(bent.z)};
+                const uint8_t px[4] = {unorm8(truth(p, fx, fy, 2)), unorm8(bent.x), unorm8(bent.y),
+                                       unorm8(bent.z)};
                 std::memcpy(&lowAo[(size_t(y) * aw + x) * 4], px, 4);
             }
         std::vector<rhi::TextureHandle> owned;
         auto keep = [&](rhi::TextureHandle t) { return owned.emplace_back(t); };
-        const rhi::TextureHandle depthTex = keep(texture(rhi::Format::R32_FLOAT, kW, kH, TU::Sampled | TU::CopyDst,
-                                                         "depth", depth.data(), depth.size() * 4));
-        const rhi::TextureHandle normalTex = keep(texture(rhi::Format::RG16_FLOAT, kW, kH, TU::Sampled | TU::CopyDst,
-                                                          "normal", normal.data(), normal.size() * 2));
+        const rhi::TextureHandle depthTex =
+            keep(texture(rhi::Format::R32_FLOAT, kW, kH, TU::Sampled | TU::CopyDst, "depth", depth.data(),
+                         depth.size() * 4));
+        const rhi::TextureHandle normalTex =
+            keep(texture(rhi::Format::RG16_FLOAT, kW, kH, TU::Sampled | TU::CopyDst, "normal", normal.data(),
+                         normal.size() * 2));
         const TU out = TU::Storage | TU::CopySrc;
         const rhi::TextureHandle shadowTex =
             sw ? keep(texture(rhi::Format::R8_UNORM, kW * layers, kH, out, "shadow")) : rhi::TextureHandle{};
-        const rhi::TextureHandle aoTex = aw ? keep(texture(rhi::Format::RGBA8_UNORM, kW, kH, out, "ao")) : rhi::TextureHandle{};
+        const rhi::TextureHandle aoTex =
+            aw ? keep(texture(rhi::Format::RGBA8_UNORM, kW, kH, out, "ao")) : rhi::TextureHandle{};
         const rhi::TextureHandle lowShadowTex =
             sw ? keep(texture(rhi::Format::R8_UNORM, sw * layers, sh, TU::Storage | TU::CopyDst, "low.shadow",
                               lowShadow.data(), lowShadow.size()))
                : rhi::TextureHandle{};
-        const rhi::TextureHandle lowAoTex = aw ? keep(texture(rhi::Format::RGBA8_UNORM, aw, ah, TU::Storage | TU::CopyDst,
-                                                              "low.ao", lowAo.data(), lowAo.size()))
-                                               : rhi::TextureHandle{};
+        const rhi::TextureHandle lowAoTex =
+            aw ? keep(texture(rhi::Format::RGBA8_UNORM, aw, ah, TU::Storage | TU::CopyDst, "low.ao",
+                              lowAo.data(), lowAo.size()))
+               : rhi::TextureHandle{};
 
         render::SceneFrameData frame;
         const float aspect = float(kW) / float(kH);
@@ -238,9 +247,9 @@ protected:
     }
 
     struct Leak {
-        int maxDistance = 0;     // the largest edge distance of a leaking pixel (0: none leaks)
-        int leaking = 0;         // pixels over the tolerance
-        float maxError = 0.0f;   // over all pixels
+        int maxDistance = 0;       // the largest edge distance of a leaking pixel (0: none leaks)
+        int leaking = 0;           // pixels over the tolerance
+        float maxError = 0.0f;     // over all pixels
         float maxInterior = 0.0f;  // over pixels 2 or more pixels from any edge
     };
 
@@ -266,20 +275,26 @@ protected:
         const char* backend = GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl";
         for (int layer = 0; layer < 2 && sw; ++layer) {
             ASSERT_EQ(r.shadow.size(), size_t(kW) * 2 * kH);
-            const Leak m = measure([&](uint32_t x, uint32_t y) { return r.shadow[size_t(y) * kW * 2 + layer * kW + x] / 255.0f; },
-                                   layer);
-            std::printf("  [%s] shadow layer %d from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d px, "
-                        "max |err| %.3f, interior max |err| %.3f\n",
-                        backend, layer, sw, sh, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
+            const Leak m =
+                measure([&](uint32_t x,
+                            uint32_t y) { return r.shadow[size_t(y) * kW * 2 + layer * kW + x] / 255.0f; },
+                        layer);
+            std::printf(
+                "  [%s] shadow layer %d from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d "
+                "px, "
+                "max |err| %.3f, interior max |err| %.3f\n",
+                backend, layer, sw, sh, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
             // Acceptance: leak distance <= 1 full-resolution pixel from the depth discontinuity.
             EXPECT_LE(m.maxDistance, 1) << "shadow layer " << layer;
         }
         if (aw) {
             ASSERT_EQ(r.ao.size(), size_t(kW) * kH * 4);
-            const Leak m = measure([&](uint32_t x, uint32_t y) { return r.ao[(size_t(y) * kW + x) * 4] / 255.0f; }, 2);
-            std::printf("  [%s] AO from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d px, max |err| "
-                        "%.3f, interior max |err| %.3f\n",
-                        backend, aw, ah, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
+            const Leak m =
+                measure([&](uint32_t x, uint32_t y) { return r.ao[(size_t(y) * kW + x) * 4] / 255.0f; }, 2);
+            std::printf(
+                "  [%s] AO from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d px, max |err| "
+                "%.3f, interior max |err| %.3f\n",
+                backend, aw, ah, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
             // Acceptance: leak distance <= 1 full-resolution pixel from the depth discontinuity.
             EXPECT_LE(m.maxDistance, 1) << "AO";
         }
@@ -314,25 +329,28 @@ TEST_P(EffectsUpsample, BackgroundAndBentNormals) {
                 ++background;
                 const bool ok = r.shadow[y * kW * 2 + x] == 255 && r.shadow[y * kW * 2 + kW + x] == 255 &&
                                 r.ao[i * 4] == 255 && std::abs(int(r.ao[i * 4 + 1]) - 128) <= 1 &&
-                                std::abs(int(r.ao[i * 4 + 2]) - 128) <= 1 && std::abs(int(r.ao[i * 4 + 3]) - 128) <= 1;
+                                std::abs(int(r.ao[i * 4 + 2]) - 128) <= 1 &&
+                                std::abs(int(r.ao[i * 4 + 3]) - 128) <= 1;
                 wrongBackground += ok ? 0 : 1;
                 continue;
             }
             if (edgeDistance(x, y) < 2) continue;
-            const glm::vec3 b = glm::vec3(r.ao[i * 4 + 1], r.ao[i * 4 + 2], r.ao[i * 4 + 3]) / 255.0f * 2.0f - 1.0f;
+            const glm::vec3 b =
+                glm::vec3(r.ao[i * 4 + 1], r.ao[i * 4 + 2], r.ao[i * 4 + 3]) / 255.0f * 2.0f - 1.0f;
             worstLength = std::max(worstLength, double(std::abs(glm::length(b) - 1.0f)));
             const float c = std::clamp(glm::dot(glm::normalize(b), p.normal), -1.0f, 1.0f);
             double& worst = p.surface == kSphere ? sphereAngle : worstAngle;
             worst = std::max(worst, double(std::acos(c)) * 57.29578);
         }
-    std::printf("  background pixels %d, wrong %d; bent normal: max angle to the surface normal %.2f deg on the "
-                "planes, %.2f deg on the sphere (not asserted: its normal turns between low-resolution samples), "
-                "max | |b| - 1 | %.4f\n",
-                background, wrongBackground, worstAngle, sphereAngle, worstLength);
-    EXPECT_GT(background, 0);          // the scene has background rows
-    EXPECT_EQ(wrongBackground, 0);     // exact background values (shadow 255, AO 255, bent 128 +- 1)
-    EXPECT_LE(worstAngle, 2.0);        // planes: bent normal within 2 degrees of the normal (8-bit input)
-    EXPECT_LE(worstLength, 0.02);      // unit length within 8-bit encoding (1/127 per channel)
+    std::printf(
+        "  background pixels %d, wrong %d; bent normal: max angle to the surface normal %.2f deg on the "
+        "planes, %.2f deg on the sphere (not asserted: its normal turns between low-resolution samples), "
+        "max | |b| - 1 | %.4f\n",
+        background, wrongBackground, worstAngle, sphereAngle, worstLength);
+    EXPECT_GT(background, 0);       // the scene has background rows
+    EXPECT_EQ(wrongBackground, 0);  // exact background values (shadow 255, AO 255, bent 128 +- 1)
+    EXPECT_LE(worstAngle, 2.0);     // planes: bent normal within 2 degrees of the normal (8-bit input)
+    EXPECT_LE(worstLength, 0.02);   // unit length within 8-bit encoding (1/127 per channel)
 }
 
 INSTANTIATE_TEST_SUITE_P(Backends, EffectsUpsample, testing::ValuesIn(gpuBackends()), backendName);

@@ -713,8 +713,9 @@ TEST_P(SceneRendererTest, PassesFollowTheScene) {
     EXPECT_EQ(st.materials, 1u);
     EXPECT_EQ(st.memory.meshBuffers, 4u * sizeof(render::GpuVertex) + 6u * 4u)
         << "one copy of the shared mesh";
-    EXPECT_EQ(st.memory.sceneBuffers, sizeof(render::GpuView) + sizeof(render::GpuScene) + 1 * sizeof(render::GpuMaterial) +
-                                          1 * sizeof(render::GpuLight) + 2 * sizeof(render::GpuObject));
+    EXPECT_EQ(st.memory.sceneBuffers, sizeof(render::GpuView) + sizeof(render::GpuScene) +
+                                          1 * sizeof(render::GpuMaterial) + 1 * sizeof(render::GpuLight) +
+                                          2 * sizeof(render::GpuObject));
     EXPECT_EQ(st.memory.textures, 0u) << "no material has a texture";
     // Output + depth, normal, material, velocity (4 bytes per pixel each) + D32 depth; no albedo.
     EXPECT_EQ(st.memory.renderTargets, uint64_t(kW) * kH * 4 * 6);
@@ -725,9 +726,9 @@ TEST_P(SceneRendererTest, PassesFollowTheScene) {
     for (auto [e, l] : s.world.view<ecs::Light>()) s.world.destroy(e);
     ASSERT_TRUE(s.render(r, d, error)) << error;
     EXPECT_EQ(r.lastFrameStats().lights, 0u);
-    EXPECT_EQ(r.lastFrameStats().memory.sceneBuffers, sizeof(render::GpuView) + sizeof(render::GpuScene) + sizeof(render::GpuMaterial) +
-                                                          sizeof(render::GpuLight) +
-                                                          2 * sizeof(render::GpuObject));
+    EXPECT_EQ(r.lastFrameStats().memory.sceneBuffers,
+              sizeof(render::GpuView) + sizeof(render::GpuScene) + sizeof(render::GpuMaterial) +
+                  sizeof(render::GpuLight) + 2 * sizeof(render::GpuObject));
 }
 
 TEST_P(SceneRendererTest, ErrorsAreReportedAndTheRendererStaysUsable) {

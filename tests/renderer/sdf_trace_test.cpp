@@ -685,8 +685,8 @@ TEST_P(SdfTrace, HybridNearestObjectMatchesAllMeshRendering) {
         // The default acceleration (tile culling, no world cache): the culling passes, then the trace.
         EXPECT_EQ(passNames(r), (std::vector<std::string>{"scene_upload", "gbuffer_mesh", "sdf_upload",
                                                           "sdf_tile_cull_bounds", "sdf_tile_cull_clear",
-                                                          "sdf_tile_cull_coarse", "sdf_tile_cull", "sdf_trace",
-                                                          "lighting"}));
+                                                          "sdf_tile_cull_coarse", "sdf_tile_cull",
+                                                          "sdf_trace", "lighting"}));
         uint64_t same = 0, hitAny = 0, objectVsObject = 0, objectVsBackground = 0;
         std::map<int, uint64_t> countA, countB;
         for (size_t i = 0; i < a.depth.size(); ++i) {

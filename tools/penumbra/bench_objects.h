@@ -8,11 +8,11 @@
 // For each backend, instancing mode and N it generates the objects scene (engine/scene/objects_scene.h),
 // loads it like `penumbra render` does and, per configuration (none: every toggle off, mTec's
 // baseline; culling; id = idField only; world = worldCache only; all = culling + worldCache +
-// idField; prepass = the cone prepass; names joined by + combine, e.g. culling+prepass), renders W warm-up then F timed frames and
-// takes per pass the median GPU ms. Passes are charged by name: trace = sdf_trace + the passes that
-// exist only for the acceleration (sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter,
-// sdf_cone_prepass and sdf_trace_* stand-ins; each group also its own column); shadow = sdf_shadow + the effects'
-// culling passes (sdf_tile_cull_effects*, sdf_effects_*: shared by shadows and AO, charged to the
+// idField; prepass = the cone prepass; names joined by + combine, e.g. culling+prepass), renders W warm-up
+// then F timed frames and takes per pass the median GPU ms. Passes are charged by name: trace = sdf_trace +
+// the passes that exist only for the acceleration (sdf_tile_cull*, sdf_world_cache*, sdf_object_scatter,
+// sdf_cone_prepass and sdf_trace_* stand-ins; each group also its own column); shadow = sdf_shadow + the
+// effects' culling passes (sdf_tile_cull_effects*, sdf_effects_*: shared by shadows and AO, charged to the
 // shadows as a whole); AO = sdf_ao. With --moving 1 the object "object 0" jumps 0.1 units left or
 // right every frame; the update share is (sdf_world_cache* + sdf_object_scatter) / the frame's GPU
 // total. Exit codes: 0 ok, 1 runtime error, 2 usage.

@@ -25,7 +25,6 @@ public:
 #define RHI_DEVICE_METHOD(ret, name, params, qualifiers) virtual ret name params qualifiers = 0;
 #include "rhi/device_api.inc"
 #undef RHI_DEVICE_METHOD
-
 };
 
 // Creates a device. Returns null (after logging why through desc.log) if the backend cannot be

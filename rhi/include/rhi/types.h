@@ -55,16 +55,16 @@ using QueryPoolHandle = Handle<QueryPoolTag>;
 // ---------------------------------------------------------------------------------------------
 // Flags helper for enum class bit sets.
 // ---------------------------------------------------------------------------------------------
-#define RHI_ENUM_FLAGS(E)                                                                          \
-    constexpr E operator|(E a, E b) {                                                              \
-        return E(std::underlying_type_t<E>(a) | std::underlying_type_t<E>(b));                     \
-    }                                                                                              \
-    constexpr E operator&(E a, E b) {                                                              \
-        return E(std::underlying_type_t<E>(a) & std::underlying_type_t<E>(b));                     \
-    }                                                                                              \
-    constexpr E operator~(E a) { return E(~std::underlying_type_t<E>(a)); }                        \
-    constexpr E& operator|=(E& a, E b) { return a = a | b; }                                       \
-    constexpr E& operator&=(E& a, E b) { return a = a & b; }                                       \
+#define RHI_ENUM_FLAGS(E)                                                      \
+    constexpr E operator|(E a, E b) {                                          \
+        return E(std::underlying_type_t<E>(a) | std::underlying_type_t<E>(b)); \
+    }                                                                          \
+    constexpr E operator&(E a, E b) {                                          \
+        return E(std::underlying_type_t<E>(a) & std::underlying_type_t<E>(b)); \
+    }                                                                          \
+    constexpr E operator~(E a) { return E(~std::underlying_type_t<E>(a)); }    \
+    constexpr E& operator|=(E& a, E b) { return a = a | b; }                   \
+    constexpr E& operator&=(E& a, E b) { return a = a & b; }                   \
     constexpr bool any(E a) { return std::underlying_type_t<E>(a) != 0; }
 
 // ---------------------------------------------------------------------------------------------
@@ -120,7 +120,7 @@ const FormatInfo& formatInfo(Format f);
 // layouts from these; the GL backend derives glMemoryBarrier bits from them.
 // ---------------------------------------------------------------------------------------------
 enum class Access : uint32_t {
-    None = 0,              // undefined / discard previous contents
+    None = 0,                // undefined / discard previous contents
     ShaderSampled = 1 << 0,  // texture() from a combined image sampler, any stage
     ShaderRead = 1 << 1,     // storage buffer / storage image read, any stage
     ShaderWrite = 1 << 2,    // storage buffer / storage image write, any stage
@@ -140,8 +140,8 @@ enum class Access : uint32_t {
 RHI_ENUM_FLAGS(Access)
 std::string toString(Access a);
 // Every access that writes.
-inline constexpr Access kWriteAccesses =
-    Access::ShaderWrite | Access::ColorTarget | Access::DepthTargetWrite | Access::CopyDst | Access::HostWrite;
+inline constexpr Access kWriteAccesses = Access::ShaderWrite | Access::ColorTarget |
+                                         Access::DepthTargetWrite | Access::CopyDst | Access::HostWrite;
 constexpr bool isWriteAccess(Access a) { return any(a & kWriteAccesses); }
 
 // ---------------------------------------------------------------------------------------------
@@ -207,7 +207,8 @@ inline uint64_t textureBytes(const TextureDesc& d) {
     uint64_t total = 0;
     for (uint32_t m = 0; m < (d.mipLevels > 0 ? d.mipLevels : 1u); ++m) {
         const uint64_t w = d.width >> m ? d.width >> m : 1u, h = d.height >> m ? d.height >> m : 1u;
-        const uint64_t z = is3D ? (d.depthOrLayers >> m ? d.depthOrLayers >> m : 1u) : (d.depthOrLayers ? d.depthOrLayers : 1u);
+        const uint64_t z = is3D ? (d.depthOrLayers >> m ? d.depthOrLayers >> m : 1u)
+                                : (d.depthOrLayers ? d.depthOrLayers : 1u);
         total += w * h * z * texel;
     }
     return total;
@@ -390,7 +391,8 @@ struct BindGroupEntry {
     uint32_t baseLayer = 0;
     uint32_t layerCount = 0;
 
-    static BindGroupEntry makeBuffer(uint32_t binding, BufferHandle b, uint64_t offset = 0, uint64_t size = 0) {
+    static BindGroupEntry makeBuffer(uint32_t binding, BufferHandle b, uint64_t offset = 0,
+                                     uint64_t size = 0) {
         BindGroupEntry e;
         e.binding = binding;
         e.buffer = b;
@@ -512,7 +514,7 @@ struct DeviceDesc {
     bool validation = false;          // RHI validation wrapper + Vulkan validation layers / GL debug
     void* window = nullptr;           // GLFWwindow* when !headless
     bool vsync = true;
-    LogCallback log;                  // null = messages go to stderr
+    LogCallback log;  // null = messages go to stderr
 };
 
 // What a device can do with a format (Device::formatSupport).
@@ -568,7 +570,7 @@ struct DeviceLimits {
 // What a device has done since it was created (Device::stats()), for tests and tools: creations
 // that should not happen every frame, and blocking waits that should not happen inside a frame loop.
 struct DeviceStats {
-    uint64_t pipelinesCreated = 0;        // compute and graphics pipelines
+    uint64_t pipelinesCreated = 0;  // compute and graphics pipelines
     uint64_t bindGroupsCreated = 0;
     uint64_t blockingTimestampReads = 0;  // readTimestamps calls: each waits for the GPU
 };
