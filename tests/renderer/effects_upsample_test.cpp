@@ -275,14 +275,13 @@ protected:
         const char* backend = GetParam() == rhi::Backend::Vulkan ? "vulkan" : "gl";
         for (int layer = 0; layer < 2 && sw; ++layer) {
             ASSERT_EQ(r.shadow.size(), size_t(kW) * 2 * kH);
-            const Leak m =
-                measure([&](uint32_t x,
-                            uint32_t y) { return r.shadow[size_t(y) * kW * 2 + layer * kW + x] / 255.0f; },
-                        layer);
+            auto shadowAt = [&](uint32_t x, uint32_t y) {
+                return r.shadow[size_t(y) * kW * 2 + layer * kW + x] / 255.0f;
+            };
+            const Leak m = measure(shadowAt, layer);
             std::printf(
-                "  [%s] shadow layer %d from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d "
-                "px, "
-                "max |err| %.3f, interior max |err| %.3f\n",
+                "  [%s] shadow layer %d from %ux%u: leaking pixels %d (|err| > %.2f), "
+                "max leak distance %d px, max |err| %.3f, interior max |err| %.3f\n",
                 backend, layer, sw, sh, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
             // Acceptance: leak distance <= 1 full-resolution pixel from the depth discontinuity.
             EXPECT_LE(m.maxDistance, 1) << "shadow layer " << layer;
@@ -292,8 +291,8 @@ protected:
             const Leak m =
                 measure([&](uint32_t x, uint32_t y) { return r.ao[(size_t(y) * kW + x) * 4] / 255.0f; }, 2);
             std::printf(
-                "  [%s] AO from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d px, max |err| "
-                "%.3f, interior max |err| %.3f\n",
+                "  [%s] AO from %ux%u: leaking pixels %d (|err| > %.2f), max leak distance %d px, "
+                "max |err| %.3f, interior max |err| %.3f\n",
                 backend, aw, ah, m.leaking, kLeakTolerance, m.maxDistance, m.maxError, m.maxInterior);
             // Acceptance: leak distance <= 1 full-resolution pixel from the depth discontinuity.
             EXPECT_LE(m.maxDistance, 1) << "AO";
